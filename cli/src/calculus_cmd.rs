@@ -1,0 +1,353 @@
+//! `qrm calculus ...`: thin formatting over `qsr_core`.
+
+use std::collections::BTreeMap;
+use std::io::{BufRead, Write};
+use std::path::PathBuf;
+
+use anyhow::{Context, Result, bail};
+use qsr_core::{BUILTIN_NAMES, Calculus, Permutation, RenderOptions, StateId};
+use serde_json::json;
+
+use crate::args::CalculusCmd;
+use crate::output::write_atomic;
+
+/// Validated form of a `calculus` subcommand (stage two of argument parsing).
+enum Job {
+    List,
+    Show {
+        calculus: Calculus,
+        json: bool,
+    },
+    Spec {
+        calculus: Calculus,
+        json: bool,
+    },
+    Classify {
+        calculus: Calculus,
+    },
+    Neighbours {
+        calculus: Calculus,
+        json: bool,
+    },
+    Compose {
+        calculus: Calculus,
+        json: bool,
+    },
+    Permute {
+        calculus: Calculus,
+        op: Permutation,
+        json: bool,
+    },
+    Render {
+        calculus: Calculus,
+        out: PathBuf,
+        width: u32,
+    },
+}
+
+fn load(name: &str) -> Result<Calculus> {
+    Calculus::resolve(name).with_context(|| format!("loading calculus `{name}`"))
+}
+
+fn validate(cmd: CalculusCmd) -> Result<Job> {
+    Ok(match cmd {
+        CalculusCmd::List => Job::List,
+        CalculusCmd::Show { name, json } => Job::Show {
+            calculus: load(&name)?,
+            json,
+        },
+        CalculusCmd::Spec { name, json } => Job::Spec {
+            calculus: load(&name)?,
+            json,
+        },
+        CalculusCmd::Classify { name } => Job::Classify {
+            calculus: load(&name)?,
+        },
+        CalculusCmd::Neighbours { name, json } => Job::Neighbours {
+            calculus: load(&name)?,
+            json,
+        },
+        CalculusCmd::Compose { name, json } => Job::Compose {
+            calculus: load(&name)?,
+            json,
+        },
+        CalculusCmd::Permute { name, op, json } => {
+            let op: Permutation = op.parse()?;
+            Job::Permute {
+                calculus: load(&name)?,
+                op,
+                json,
+            }
+        }
+        CalculusCmd::Render { name, out, width } => {
+            if out
+                .extension()
+                .is_none_or(|e| !e.eq_ignore_ascii_case("svg"))
+            {
+                bail!("--out must name an .svg file, got {}", out.display());
+            }
+            if !(64..=8192).contains(&width) {
+                bail!("--width must be between 64 and 8192 pixels, got {width}");
+            }
+            Job::Render {
+                calculus: load(&name)?,
+                out,
+                width,
+            }
+        }
+    })
+}
+
+/// Runs one `calculus` subcommand.
+pub fn run(cmd: CalculusCmd) -> Result<()> {
+    let job = validate(cmd)?;
+    let stdout = std::io::stdout();
+    let mut out = stdout.lock();
+    match job {
+        Job::List => {
+            for n in BUILTIN_NAMES {
+                writeln!(out, "{n}")?;
+            }
+        }
+        Job::Show { calculus, json } => show(&mut out, &calculus, json)?,
+        Job::Spec { calculus, json } => {
+            let text = if json {
+                calculus.spec().to_json_string()?
+            } else {
+                calculus.spec().to_toml_string()?
+            };
+            writeln!(out, "{}", text.trim_end())?;
+        }
+        Job::Classify { calculus } => classify(&mut out, &calculus)?,
+        Job::Neighbours { calculus, json } => neighbours(&mut out, &calculus, json)?,
+        Job::Compose { calculus, json } => compose(&mut out, &calculus, json)?,
+        Job::Permute { calculus, op, json } => permute(&mut out, &calculus, op, json)?,
+        Job::Render {
+            calculus,
+            out: path,
+            width,
+        } => {
+            let svg = qsr_core::render_svg(
+                &calculus,
+                &RenderOptions {
+                    width,
+                    ..RenderOptions::default()
+                },
+            )?;
+            write_atomic(&path, svg.as_bytes())?;
+            writeln!(out, "wrote {}", path.display())?;
+        }
+    }
+    Ok(())
+}
+
+fn labels_of(c: &Calculus, set: &[StateId]) -> Vec<String> {
+    set.iter().map(|s| c.label(*s).to_owned()).collect()
+}
+
+fn show(out: &mut impl Write, c: &Calculus, json: bool) -> Result<()> {
+    let spec = c.spec();
+    if json {
+        let v = json!({
+            "name": c.name(),
+            "description": c.description(),
+            "frame": c.frame().as_str(),
+            "arity": match c.frame() {
+                qsr_core::FrameKind::Ternary => 3,
+                qsr_core::FrameKind::BinaryOriented => 2,
+                qsr_core::FrameKind::Extended => 3,
+            },
+            "input_len": c.frame().input_len(),
+            "n_states": c.n_states(),
+            "max_entropy": c.max_entropy(),
+            "states": c.states().map(|s| json!({"id": s.0, "label": c.label(s)})).collect::<Vec<_>>(),
+            "constraints": spec.constraints,
+            "raster": spec.raster.as_ref().map(|r| json!({"window": r.window, "nx": r.nx, "ny": r.ny, "outside": r.outside})),
+        });
+        writeln!(out, "{}", serde_json::to_string_pretty(&v)?)?;
+        return Ok(());
+    }
+    writeln!(out, "{} — {}", c.name(), c.description())?;
+    writeln!(
+        out,
+        "frame: {} ({} numbers per line for `classify`)",
+        c.frame().as_str(),
+        c.frame().input_len()
+    )?;
+    writeln!(
+        out,
+        "states: {} (max entropy {:.3} nats)",
+        c.n_states(),
+        c.max_entropy()
+    )?;
+    for s in c.states() {
+        let cells = &spec.states[s.index()].cells;
+        if cells.is_empty() {
+            writeln!(out, "  {:>3}  {}", s.0, c.label(s))?;
+        } else {
+            writeln!(
+                out,
+                "  {:>3}  {:<16} cells {}",
+                s.0,
+                c.label(s),
+                cells.join(" ")
+            )?;
+        }
+    }
+    if !spec.constraints.is_empty() {
+        writeln!(out, "constraints (sign pattern order):")?;
+        for (i, k) in spec.constraints.iter().enumerate() {
+            let geom = match k.shape {
+                qsr_core::Shape::Line { a, b, c } => format!("line {a}·x + {b}·y + {c} = 0"),
+                qsr_core::Shape::Circle { center, radius } => {
+                    format!(
+                        "circle centre ({}, {}) radius {radius}",
+                        center[0], center[1]
+                    )
+                }
+            };
+            writeln!(
+                out,
+                "  {i}  {:<10} {geom}, zero set joins the {:?} side",
+                k.name, k.zero
+            )?;
+        }
+    }
+    if let Some(r) = &spec.raster {
+        writeln!(
+            out,
+            "raster: {}x{} over {:?}, outside: {:?}",
+            r.nx, r.ny, r.window, r.outside
+        )?;
+    }
+    Ok(())
+}
+
+fn classify(out: &mut impl Write, c: &Calculus) -> Result<()> {
+    let stdin = std::io::stdin();
+    let mut labels = String::new();
+    for (i, line) in stdin.lock().lines().enumerate() {
+        let lineno = i + 1;
+        let line = line.with_context(|| format!("reading stdin line {lineno}"))?;
+        let text = line.trim();
+        if text.is_empty() || text.starts_with('#') {
+            continue;
+        }
+        let row: Vec<f64> = text
+            .split_whitespace()
+            .map(str::parse::<f64>)
+            .collect::<Result<_, _>>()
+            .with_context(|| format!("line {lineno}: `{text}` is not a list of numbers"))?;
+        let s = c
+            .classify_row(&row)
+            .with_context(|| format!("line {lineno}: `{text}`"))?;
+        labels.push_str(c.label(s));
+        labels.push('\n');
+    }
+    // Printed only once every line classified: a bad line leaves no partial output.
+    out.write_all(labels.as_bytes())?;
+    Ok(())
+}
+
+fn neighbours(out: &mut impl Write, c: &Calculus, json: bool) -> Result<()> {
+    let g = c.neighbours();
+    if json {
+        let v = json!({
+            "states": c.labels(),
+            "adjacent": g.edges().iter().map(|(a, b)| [c.label(*a), c.label(*b)]).collect::<Vec<_>>(),
+            "distance": g.distance_matrix(),
+            "diameter": g.diameter(),
+        });
+        writeln!(out, "{}", serde_json::to_string(&v)?)?;
+        return Ok(());
+    }
+    writeln!(
+        out,
+        "{}: {} states, {} adjacent pairs, diameter {:?}",
+        c.name(),
+        c.n_states(),
+        g.edges().len(),
+        g.diameter()
+    )?;
+    for s in c.states() {
+        writeln!(
+            out,
+            "  {:<16} {}",
+            c.label(s),
+            labels_of(c, &g.neighbours_of(s)).join(" ")
+        )?;
+    }
+    writeln!(out, "distance matrix (rows and columns in state order):")?;
+    for row in g.distance_matrix() {
+        let cells: Vec<String> = row
+            .iter()
+            .map(|d| d.map_or("-".into(), |d| d.to_string()))
+            .collect();
+        writeln!(out, "  {}", cells.join(" "))?;
+    }
+    Ok(())
+}
+
+fn compose(out: &mut impl Write, c: &Calculus, json: bool) -> Result<()> {
+    let t = c.compose_table()?;
+    if json {
+        let mut table = BTreeMap::new();
+        for r in c.states() {
+            let mut row = BTreeMap::new();
+            for s in c.states() {
+                row.insert(c.label(s).to_owned(), labels_of(c, t.get(r, s)));
+            }
+            table.insert(c.label(r).to_owned(), row);
+        }
+        writeln!(
+            out,
+            "{}",
+            serde_json::to_string(&json!({"states": c.labels(), "table": table}))?
+        )?;
+        return Ok(());
+    }
+    writeln!(
+        out,
+        "{}: {{AB:C}} ∘ {{BC:D}} → {{AB:D}}, {} entries",
+        c.name(),
+        t.n_entries()
+    )?;
+    for r in c.states() {
+        for s in c.states() {
+            writeln!(
+                out,
+                "  {} ∘ {} = {{{}}}",
+                c.label(r),
+                c.label(s),
+                labels_of(c, t.get(r, s)).join(", ")
+            )?;
+        }
+    }
+    Ok(())
+}
+
+fn permute(out: &mut impl Write, c: &Calculus, op: Permutation, json: bool) -> Result<()> {
+    let t = c.permutation(op)?;
+    if json {
+        let table: BTreeMap<String, Vec<String>> = c
+            .states()
+            .map(|r| (c.label(r).to_owned(), labels_of(c, t.get(r))))
+            .collect();
+        writeln!(
+            out,
+            "{}",
+            serde_json::to_string(&json!({"states": c.labels(), "op": op.name(), "table": table}))?
+        )?;
+        return Ok(());
+    }
+    writeln!(out, "{}: {}", c.name(), op)?;
+    for r in c.states() {
+        writeln!(
+            out,
+            "  {:<16} → {{{}}}",
+            c.label(r),
+            labels_of(c, t.get(r)).join(", ")
+        )?;
+    }
+    Ok(())
+}

@@ -1,0 +1,29 @@
+//! `qrm` — the command line of qrm.
+//!
+//! Arguments are parsed in two stages: clap turns the command line into raw flags
+//! ([`args`]), then each subcommand validates them into a config before any work starts, so
+//! a bad flag never leaves half a result behind. The binary stays thin: every algorithm
+//! lives in the library crates; this crate formats, writes files and reports errors (each
+//! error once, at the top, with its chain).
+
+mod args;
+mod calculus_cmd;
+mod output;
+
+use std::process::ExitCode;
+
+use clap::Parser;
+
+fn main() -> ExitCode {
+    let cli = args::Cli::parse();
+    let result = match cli.command {
+        args::Command::Calculus(cmd) => calculus_cmd::run(cmd),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            ExitCode::FAILURE
+        }
+    }
+}

@@ -1,0 +1,51 @@
+//! EDC classification throughput on 10^7 random triplets, one core and two.
+//!
+//! The baseline is the vectorised NumPy implementation of the same rule in
+//! `classify_numpy.py` beside this file, which runs this bench (or reads its last result)
+//! and prints the ratio: `python crates/qsr-core/benches/classify_numpy.py`.
+
+use criterion::{Criterion, Throughput, criterion_group, criterion_main};
+use qsr_core::{Calculus, StateId};
+use rand::{RngExt, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use rayon::prelude::*;
+
+/// Triplets per iteration (the 10^7).
+const N: usize = 10_000_000;
+
+/// Same generator as the NumPy script: coordinates uniform in [0, 100).
+fn triplets() -> Vec<[f64; 6]> {
+    let mut rng = ChaCha8Rng::seed_from_u64(7);
+    (0..N)
+        .map(|_| std::array::from_fn(|_| rng.random_range(0.0..100.0)))
+        .collect()
+}
+
+fn bench(c: &mut Criterion) {
+    let edc = Calculus::builtin("edc").expect("edc is built in");
+    let t = triplets();
+    let mut out = vec![StateId(0); N];
+    let mut g = c.benchmark_group("edc_classify_1e7");
+    g.sample_size(10);
+    g.throughput(Throughput::Elements(N as u64));
+    g.bench_function("qrm_1_thread", |b| {
+        b.iter(|| edc.classify_triplets(&t, &mut out).expect("valid triplets"));
+    });
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(2)
+        .build()
+        .expect("thread pool");
+    g.bench_function("qrm_2_threads", |b| {
+        b.iter(|| {
+            pool.install(|| {
+                t.par_chunks(1 << 16)
+                    .zip(out.par_chunks_mut(1 << 16))
+                    .for_each(|(ti, oi)| edc.classify_triplets(ti, oi).expect("valid triplets"));
+            });
+        });
+    });
+    g.finish();
+}
+
+criterion_group!(benches, bench);
+criterion_main!(benches);

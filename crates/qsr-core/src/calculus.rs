@@ -1,0 +1,582 @@
+//! [`Calculus`]: a validated, compiled calculus with classification and lazily computed
+//! derived structure (neighbours, permutations, composition, merges).
+
+use std::fmt;
+use std::sync::{Arc, OnceLock};
+
+use nalgebra::Point2;
+
+use crate::compose::{ComposeOptions, ComposeTable};
+use crate::coverage::{Features, StatePool, state_pools};
+use crate::error::{QsrError, Result, spec_error};
+use crate::frame::{AnyFrame, ExtendedFrame, FrameKind, OrientedFrame, Segment, TernaryFrame};
+use crate::merge::MergeMap;
+use crate::neighbours::NeighbourGraph;
+use crate::partition::{ConstraintPartition, Partition, RasterPartition, complete_table};
+use crate::permute::{Permutation, PermutationTable};
+use crate::spec::{CalculusSpec, OutsideRule, RasterSpec, format_vector, pattern_table};
+
+/// Index of a state within its calculus (`0..n_states`), in spec order.
+#[derive(
+    Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, serde::Serialize, serde::Deserialize,
+)]
+#[serde(transparent)]
+pub struct StateId(pub u16);
+
+impl StateId {
+    /// The index as `usize`.
+    #[inline(always)]
+    #[must_use]
+    pub fn index(self) -> usize {
+        usize::from(self.0)
+    }
+}
+
+impl fmt::Display for StateId {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}", self.0)
+    }
+}
+
+/// Probe points used to validate a constraint spec (sign vectors that occur in the plane).
+const VALIDATION_PROBES: usize = 200_000;
+/// Probe points behind permutations, merges and the compose pools.
+pub(crate) const DERIVED_PROBES: usize = 400_000;
+/// Points kept per state for composition.
+pub(crate) const POOL_CAPACITY: usize = 8192;
+/// Seed of every internal sampler: derived structure is a deterministic function of the spec.
+pub(crate) const DERIVED_SEED: u64 = 0x5152_4d5f_7173_7231;
+
+#[derive(Debug, Default)]
+struct DerivedCache {
+    probes: OnceLock<Vec<Point2<f64>>>,
+    pools: OnceLock<Vec<StatePool>>,
+    neighbours: OnceLock<NeighbourGraph>,
+    compose: OnceLock<ComposeTable>,
+    permutations: [OnceLock<PermutationTable>; 5],
+}
+
+/// A qualitative calculus: a frame kind, a partition of the normalised plane into labelled
+/// states, and everything derived from it.
+///
+/// Built-in, user (spec file) and learned (raster) calculi are all this one type.
+///
+/// ```
+/// use qsr_core::Calculus;
+/// use nalgebra::Point2;
+///
+/// let edc = Calculus::builtin("edc")?;
+/// let s = edc.classify_triplet(Point2::new(0.0, 0.0), Point2::new(0.0, 1.0), Point2::new(-0.2, 0.3))?;
+/// assert_eq!(edc.label(s), "13"); // left of A→B, inside both circles, below the midpoint
+/// assert_eq!(edc.neighbours().diameter(), Some(4));
+/// # Ok::<(), qsr_core::QsrError>(())
+/// ```
+#[derive(Debug, Clone)]
+pub struct Calculus {
+    spec: CalculusSpec,
+    labels: Vec<String>,
+    partition: Partition,
+    features: Arc<Features>,
+    derived: Arc<DerivedCache>,
+}
+
+impl Calculus {
+    /// Compiles and validates a spec.
+    ///
+    /// Constraint specs: every sign vector met by a dense probe of the plane (see
+    /// [`crate::coverage`]) must be claimed by a state, and every state must be met.
+    /// Raster specs: every state must occur in the raster or as the outside state.
+    ///
+    /// # Errors
+    /// [`QsrError::Spec`] naming the problem (duplicate label, bad pattern, overlapping
+    /// patterns, a gap with an example point, an unreachable state, a bad raster, ...).
+    pub fn from_spec(spec: CalculusSpec) -> Result<Self> {
+        spec.check_static()?;
+        let labels: Vec<String> = spec.states.iter().map(|s| s.label.clone()).collect();
+        let partition = if let Some(r) = &spec.raster {
+            Partition::Raster(compile_raster(&spec, r)?)
+        } else {
+            compile_constraints(&spec)?
+        };
+        let features = Arc::new(Features::of(&partition));
+        Ok(Self {
+            spec,
+            labels,
+            partition,
+            features,
+            derived: Arc::default(),
+        })
+    }
+
+    /// Parses and validates a TOML spec.
+    ///
+    /// # Errors
+    /// As [`CalculusSpec::from_toml_str`] and [`Calculus::from_spec`].
+    pub fn from_toml_str(text: &str) -> Result<Self> {
+        Self::from_spec(CalculusSpec::from_toml_str(text)?)
+    }
+
+    /// Parses and validates a JSON spec.
+    ///
+    /// # Errors
+    /// As [`CalculusSpec::from_json_str`] and [`Calculus::from_spec`].
+    pub fn from_json_str(text: &str) -> Result<Self> {
+        Self::from_spec(CalculusSpec::from_json_str(text)?)
+    }
+
+    /// Reads and validates a spec file (`.json` → JSON, otherwise TOML).
+    ///
+    /// # Errors
+    /// As [`CalculusSpec::from_path`] and [`Calculus::from_spec`].
+    pub fn from_path(path: &std::path::Path) -> Result<Self> {
+        Self::from_spec(CalculusSpec::from_path(path)?)
+    }
+
+    /// A built-in calculus by name, or a spec file when `name_or_path` names an existing file.
+    ///
+    /// # Errors
+    /// [`QsrError::UnknownCalculus`] when it is neither; spec errors for a bad file.
+    pub fn resolve(name_or_path: &str) -> Result<Self> {
+        match Self::builtin(name_or_path) {
+            Ok(c) => Ok(c),
+            Err(e @ QsrError::UnknownCalculus { .. }) => {
+                let path = std::path::Path::new(name_or_path);
+                if path.is_file() {
+                    Self::from_path(path)
+                } else {
+                    Err(e)
+                }
+            }
+            Err(e) => Err(e),
+        }
+    }
+
+    /// Name.
+    #[must_use]
+    pub fn name(&self) -> &str {
+        &self.spec.name
+    }
+
+    /// One-line description.
+    #[must_use]
+    pub fn description(&self) -> &str {
+        &self.spec.description
+    }
+
+    /// The frame kind.
+    #[must_use]
+    pub fn frame(&self) -> FrameKind {
+        self.spec.frame
+    }
+
+    /// The spec it was built from.
+    #[must_use]
+    pub fn spec(&self) -> &CalculusSpec {
+        &self.spec
+    }
+
+    /// The compiled partition.
+    #[must_use]
+    pub fn partition(&self) -> &Partition {
+        &self.partition
+    }
+
+    /// Number of states `Q`.
+    #[must_use]
+    pub fn n_states(&self) -> usize {
+        self.labels.len()
+    }
+
+    /// Labels in state-id order.
+    #[must_use]
+    pub fn labels(&self) -> &[String] {
+        &self.labels
+    }
+
+    /// Label of a state.
+    ///
+    /// # Panics
+    /// Never for ids this calculus returned; an id from another calculus may be out of range.
+    #[must_use]
+    pub fn label(&self, s: StateId) -> &str {
+        &self.labels[s.index()]
+    }
+
+    /// State id of a label.
+    ///
+    /// # Errors
+    /// [`QsrError::UnknownState`].
+    pub fn state(&self, label: &str) -> Result<StateId> {
+        self.labels
+            .iter()
+            .position(|l| l == label)
+            .map(|i| StateId(i as u16))
+            .ok_or_else(|| QsrError::UnknownState {
+                calculus: self.name().to_owned(),
+                state: label.to_owned(),
+            })
+    }
+
+    /// All state ids.
+    pub fn states(&self) -> impl ExactSizeIterator<Item = StateId> + '_ {
+        (0..self.labels.len() as u16).map(StateId)
+    }
+
+    /// `ln Q`: the entropy of the uniform distribution over states, the maximum any belief
+    /// over this calculus can have (thesis §2.3.1; 3.00 nats for the EDC).
+    #[must_use]
+    pub fn max_entropy(&self) -> f64 {
+        (self.n_states() as f64).ln()
+    }
+
+    /// State of a point given in normalised coordinates.
+    #[inline(always)]
+    #[must_use]
+    pub fn classify_normalised(&self, p: &Point2<f64>) -> StateId {
+        StateId(self.partition.classify(p))
+    }
+
+    fn expect_frame(&self, kind: FrameKind) -> Result<()> {
+        if self.frame() == kind {
+            Ok(())
+        } else {
+            Err(QsrError::Arity(format!(
+                "calculus `{}` is {}, not {}",
+                self.name(),
+                self.frame().as_str(),
+                kind.as_str()
+            )))
+        }
+    }
+
+    /// `{A, B : C}` for a ternary calculus.
+    ///
+    /// # Errors
+    /// [`QsrError::Arity`] for a non-ternary calculus, frame errors for degenerate or
+    /// non-finite input.
+    pub fn classify_triplet(
+        &self,
+        a: Point2<f64>,
+        b: Point2<f64>,
+        c: Point2<f64>,
+    ) -> Result<StateId> {
+        self.expect_frame(FrameKind::Ternary)?;
+        crate::error::check_finite("located point", &[c.x, c.y])?;
+        let f = TernaryFrame::new(a, b)?;
+        Ok(self.classify_normalised(&f.to_normalised(&c)))
+    }
+
+    /// `{A : C}` for a binary oriented calculus; `yaw` is A's heading (radians from world +x).
+    ///
+    /// # Errors
+    /// [`QsrError::Arity`] for another kind of calculus, [`QsrError::NonFinite`].
+    pub fn classify_oriented(
+        &self,
+        origin: Point2<f64>,
+        yaw: f64,
+        c: Point2<f64>,
+    ) -> Result<StateId> {
+        self.expect_frame(FrameKind::BinaryOriented)?;
+        crate::error::check_finite("located point", &[c.x, c.y])?;
+        let f = OrientedFrame::new(origin, yaw)?;
+        Ok(self.classify_normalised(&f.to_normalised(&c)))
+    }
+
+    /// The state of `c` relative to two walls, for an extended calculus.
+    ///
+    /// # Errors
+    /// [`QsrError::Arity`] for another kind of calculus, frame errors.
+    pub fn classify_extended(
+        &self,
+        wall1: Segment,
+        wall2: Segment,
+        c: Point2<f64>,
+    ) -> Result<StateId> {
+        self.expect_frame(FrameKind::Extended)?;
+        crate::error::check_finite("located point", &[c.x, c.y])?;
+        let f = ExtendedFrame::new(wall1, wall2)?;
+        Ok(self.classify_normalised(&f.to_normalised(&c)))
+    }
+
+    /// Classifies one row of numbers in the layout of [`FrameKind::input_len`], for any frame.
+    ///
+    /// # Errors
+    /// [`QsrError::Arity`] for a wrong length, frame errors.
+    pub fn classify_row(&self, row: &[f64]) -> Result<StateId> {
+        let (frame, c): (AnyFrame, _) = self.frame().frame_from_row(row)?;
+        Ok(self.classify_normalised(&frame.to_normalised(&c)))
+    }
+
+    /// Classifies many ternary triplets `[ax, ay, bx, by, cx, cy]` into `out` (same length).
+    ///
+    /// This is the hot loop of mapping: no allocation, no square root, one table lookup.
+    ///
+    /// # Errors
+    /// [`QsrError::Arity`] for a non-ternary calculus or mismatched lengths; the first
+    /// non-finite or degenerate row is reported with its index and nothing after it is
+    /// guaranteed written.
+    pub fn classify_triplets(&self, triplets: &[[f64; 6]], out: &mut [StateId]) -> Result<()> {
+        self.expect_frame(FrameKind::Ternary)?;
+        if triplets.len() != out.len() {
+            return Err(QsrError::Arity(format!(
+                "{} triplets but an output of length {}",
+                triplets.len(),
+                out.len()
+            )));
+        }
+        match &self.partition {
+            Partition::Constraints(c) => classify_rows(triplets, out, |x, y| c.classify(x, y)),
+            Partition::Raster(r) => classify_rows(triplets, out, |x, y| r.classify(x, y)),
+        }
+    }
+
+    pub(crate) fn features(&self) -> &Features {
+        &self.features
+    }
+
+    /// The probe points behind derived structure (normalised coordinates).
+    pub(crate) fn probes(&self) -> &[Point2<f64>] {
+        self.derived
+            .probes
+            .get_or_init(|| self.features.probes(DERIVED_PROBES, DERIVED_SEED))
+    }
+
+    pub(crate) fn pools(&self) -> &[StatePool] {
+        self.derived.pools.get_or_init(|| {
+            state_pools(
+                &self.partition,
+                self.n_states(),
+                self.probes(),
+                POOL_CAPACITY,
+                DERIVED_SEED ^ 0x9e37,
+            )
+        })
+    }
+
+    /// The conceptual-neighbourhood graph (computed once, then cached).
+    #[must_use]
+    pub fn neighbours(&self) -> &NeighbourGraph {
+        self.derived
+            .neighbours
+            .get_or_init(|| NeighbourGraph::compute(self))
+    }
+
+    /// The table of a permutation operation (computed once, then cached).
+    ///
+    /// # Errors
+    /// [`QsrError::Unsupported`] for calculi that are not ternary.
+    pub fn permutation(&self, op: Permutation) -> Result<&PermutationTable> {
+        self.require_ternary(op.name())?;
+        Ok(self.derived.permutations[op as usize]
+            .get_or_init(|| PermutationTable::compute(self, op, true)))
+    }
+
+    /// A permutation table, with (`boundaries = true`, as [`Calculus::permutation`]) or
+    /// without configurations that have a point exactly on a boundary (not cached).
+    ///
+    /// # Errors
+    /// [`QsrError::Unsupported`] for calculi that are not ternary.
+    pub fn permutation_with(&self, op: Permutation, boundaries: bool) -> Result<PermutationTable> {
+        self.require_ternary(op.name())?;
+        Ok(PermutationTable::compute(self, op, boundaries))
+    }
+
+    /// The composition table `{AB:C} ∘ {BC:D} → {AB:D}` with default sampling (cached).
+    ///
+    /// # Errors
+    /// [`QsrError::Unsupported`] for calculi that are not ternary.
+    pub fn compose_table(&self) -> Result<&ComposeTable> {
+        self.require_ternary("compose")?;
+        Ok(self
+            .derived
+            .compose
+            .get_or_init(|| ComposeTable::compute(self, &ComposeOptions::default())))
+    }
+
+    /// The composition table with explicit sampling options (not cached).
+    ///
+    /// # Errors
+    /// [`QsrError::Unsupported`] for calculi that are not ternary.
+    pub fn compose_table_with(&self, options: &ComposeOptions) -> Result<ComposeTable> {
+        self.require_ternary("compose")?;
+        Ok(ComposeTable::compute(self, options))
+    }
+
+    /// The map from this (finer) calculus's states to `coarse`'s.
+    ///
+    /// # Errors
+    /// [`QsrError::Arity`] when the frames differ, [`QsrError::NotARefinement`] when a state
+    /// of `self` meets two states of `coarse`.
+    pub fn merge_map(&self, coarse: &Calculus) -> Result<MergeMap> {
+        MergeMap::compute(self, coarse)
+    }
+
+    /// This calculus as a label raster over `window` (`[x_min, x_max, y_min, y_max]`) with
+    /// `nx × ny` cells (each labelled by its centre) and `outside` beyond it: a learned
+    /// calculus in the form SERGE produces.
+    ///
+    /// # Errors
+    /// Spec errors for an impossible raster (empty window, zero cells, a state no cell hits).
+    pub fn rasterise(
+        &self,
+        window: [f64; 4],
+        nx: usize,
+        ny: usize,
+        outside: OutsideRule,
+    ) -> Result<Self> {
+        let [x0, x1, y0, y1] = window;
+        if !window.iter().all(|v| v.is_finite()) || x1 <= x0 || y1 <= y0 || nx == 0 || ny == 0 {
+            return Err(spec_error(
+                self.name(),
+                format!("cannot rasterise over window {window:?} with {nx}×{ny} cells"),
+            ));
+        }
+        let dx = (x1 - x0) / nx as f64;
+        let dy = (y1 - y0) / ny as f64;
+        let mut cells = Vec::with_capacity(nx * ny);
+        for iy in 0..ny {
+            for ix in 0..nx {
+                let p = Point2::new(x0 + (ix as f64 + 0.5) * dx, y0 + (iy as f64 + 0.5) * dy);
+                cells.push(self.partition.classify(&p));
+            }
+        }
+        let mut spec = self.spec.clone();
+        spec.name = format!("{}-raster", self.spec.name);
+        spec.description = format!("{} rasterised over {window:?} at {nx}x{ny}", self.spec.name);
+        spec.constraints.clear();
+        spec.states.iter_mut().for_each(|s| s.cells.clear());
+        spec.raster = Some(RasterSpec {
+            window,
+            nx,
+            ny,
+            cells,
+            outside,
+        });
+        Self::from_spec(spec)
+    }
+
+    fn require_ternary(&self, operation: &str) -> Result<()> {
+        if self.frame() == FrameKind::Ternary {
+            Ok(())
+        } else {
+            Err(QsrError::Unsupported {
+                operation: operation.to_owned(),
+                calculus: self.name().to_owned(),
+                reason: format!(
+                    "permutations and composition are defined for ternary point calculi; a {} \
+                     relation does not record what they need (e.g. the heading of the middle \
+                     object)",
+                    self.frame().as_str()
+                ),
+            })
+        }
+    }
+}
+
+#[inline(always)]
+fn classify_rows(
+    triplets: &[[f64; 6]],
+    out: &mut [StateId],
+    classify: impl Fn(f64, f64) -> u16,
+) -> Result<()> {
+    for (i, (t, o)) in triplets.iter().zip(out.iter_mut()).enumerate() {
+        let [ax, ay, bx, by, cx, cy] = *t;
+        let dx = bx - ax;
+        let dy = by - ay;
+        let len2 = dx * dx + dy * dy;
+        let scale = 1f64.max(ax.abs()).max(ay.abs()).max(bx.abs()).max(by.abs());
+        let tol = crate::frame::DEGENERATE_TOLERANCE * scale;
+        // `len2 > tol²` is false for NaN too: one test guards both.
+        let valid = len2 > tol * tol && cx.is_finite() && cy.is_finite();
+        if !valid {
+            return Err(row_error(i, t));
+        }
+        let inv = 1.0 / len2;
+        let vx = cx - ax;
+        let vy = cy - ay;
+        let x = -(dx * vy - dy * vx) * inv;
+        let y = (dx * vx + dy * vy) * inv;
+        *o = StateId(classify(x, y));
+    }
+    Ok(())
+}
+
+fn row_error(i: usize, t: &[f64; 6]) -> QsrError {
+    if t.iter().all(|v| v.is_finite()) {
+        QsrError::DegenerateFrame {
+            reason: format!("triplet {i}: reference points coincide ({t:?})"),
+        }
+    } else {
+        QsrError::NonFinite {
+            what: format!("triplet {i} {t:?}"),
+        }
+    }
+}
+
+fn compile_constraints(spec: &CalculusSpec) -> Result<Partition> {
+    let k = spec.constraints.len();
+    let shapes: Vec<_> = spec.constraints.iter().map(|c| (c.shape, c.zero)).collect();
+    let mut table = pattern_table(spec);
+    let draft = ConstraintPartition::new(&shapes, table.clone());
+    let probes = Features::of(&Partition::Constraints(draft.clone()))
+        .probes(VALIDATION_PROBES, DERIVED_SEED ^ 0xa11d);
+    let mut met = vec![false; spec.states.len()];
+    for p in &probes {
+        let v = draft.sign_vector(p.x, p.y);
+        match table[v as usize] {
+            u16::MAX => {
+                return Err(spec_error(
+                    &spec.name,
+                    format!(
+                        "sign vector `{}` occurs (e.g. at ({}, {})) but no state claims it",
+                        format_vector(v, k),
+                        p.x,
+                        p.y
+                    ),
+                ));
+            }
+            s => met[usize::from(s)] = true,
+        }
+    }
+    if let Some(i) = met.iter().position(|m| !m) {
+        return Err(spec_error(
+            &spec.name,
+            format!(
+                "state `{}` is unreachable: none of its sign patterns occurs in the plane",
+                spec.states[i].label
+            ),
+        ));
+    }
+    complete_table(&mut table);
+    Ok(Partition::Constraints(ConstraintPartition::new(
+        &shapes, table,
+    )))
+}
+
+fn compile_raster(spec: &CalculusSpec, r: &RasterSpec) -> Result<RasterPartition> {
+    let outside = match &r.outside {
+        OutsideRule::Clamp => None,
+        OutsideRule::State { label } => spec
+            .states
+            .iter()
+            .position(|s| &s.label == label)
+            .map(|i| i as u16),
+    };
+    let mut met = vec![false; spec.states.len()];
+    for &c in &r.cells {
+        met[usize::from(c)] = true;
+    }
+    if let Some(o) = outside {
+        met[usize::from(o)] = true;
+    }
+    if let Some(i) = met.iter().position(|m| !m) {
+        return Err(spec_error(
+            &spec.name,
+            format!(
+                "state `{}` is unreachable: no raster cell carries it",
+                spec.states[i].label
+            ),
+        ));
+    }
+    Ok(RasterPartition::new(r, outside))
+}

@@ -1,0 +1,91 @@
+//! # qsr-core — qualitative spatial calculi as data
+//!
+//! A *qualitative spatial relationship* locates one entity relative to a frame made of
+//! reference entities (thesis §4.2): "C is left of A→B and inside the circle about A". A
+//! *calculus* partitions the frame's normalised plane into labelled *states*. Everything
+//! else in qrm — the probabilistic mapper, SERGE's learned calculi, Q-Link's planner — asks
+//! this crate three questions: *which state is this configuration in*, *which states touch*,
+//! and *what can be inferred by combining relations*.
+//!
+//! ## Why calculi are data
+//! The thesis uses six point calculi that are merges of one another (§2.3.1), binary and
+//! extended ones for navigation (§4.2, §4.4.2), and calculi *learned* from data by SERGE
+//! (§3.3.2). Writing each as code would mean six classifiers, six neighbour graphs and six
+//! compose tables typed by hand. Here a calculus is a [`CalculusSpec`] — lines and circles
+//! with a sign-pattern merge table, or a label raster — validated once, and every derived
+//! table is *computed* from it by one sampler ([`coverage`]) designed to reach thin,
+//! unbounded and on-boundary configurations. The built-ins are spec files loaded through the
+//! same path as a user's.
+//!
+//! ## Naming rule for operations
+//! - `classify_*` maps configurations to states (`classify_triplet`, `classify_oriented`,
+//!   `classify_extended`, `classify_row`, `classify_triplets` for batches,
+//!   `classify_normalised` when the point is already in the frame).
+//! - Nouns return derived structure, computed on first use and cached:
+//!   [`Calculus::neighbours`], [`Calculus::permutation`], [`Calculus::compose_table`].
+//! - `merge_*` goes from a finer calculus to a coarser one ([`Calculus::merge_map`],
+//!   [`MergeMap::merge_distribution`]).
+//! - `from_*` / `to_*` convert specs and frames.
+//!
+//! ## Conventions
+//! Normalised ternary frame: A = (0, 0), B = (0, 1), **x < 0 is left** of A→B (a proper
+//! rotation; the thesis's printed Γ is a reflection, DESIGN §3). Each constraint's zero set
+//! joins one side, so every point has exactly one state.
+//!
+//! ## Errors
+//! Every fallible call returns [`QsrError`]:
+//! | variant | raised by |
+//! |---|---|
+//! | `NonFinite` | NaN/∞ coordinates or parameters |
+//! | `DegenerateFrame` | coincident reference points (see [`DEGENERATE_TOLERANCE`]), zero-length or opposed walls |
+//! | `Spec` | malformed spec, duplicate label, bad pattern, overlap, gap, unreachable state, bad raster |
+//! | `UnknownCalculus`, `UnknownState`, `UnknownOperation` | names that do not exist |
+//! | `Unsupported` | permutations/composition of non-ternary calculi |
+//! | `Arity` | wrong number of inputs, wrong frame kind, mismatched lengths |
+//! | `NotARefinement` | merging into a calculus that is not coarser |
+//! | `Io` | unreadable spec file |
+//!
+//! ```
+//! use qsr_core::{Calculus, Permutation};
+//!
+//! let dc = Calculus::builtin("double-cross")?;
+//! let inv = dc.permutation(Permutation::Inverse)?;
+//! let lf = dc.state("left-front")?;
+//! // Seen from B looking at A, what was left-front of A→B is right-back.
+//! assert_eq!(inv.get(lf), &[dc.state("right-back")?]);
+//! # Ok::<(), qsr_core::QsrError>(())
+//! ```
+
+mod builtin;
+mod calculus;
+mod compose;
+pub mod coverage;
+mod error;
+mod frame;
+mod merge;
+mod neighbours;
+mod partition;
+mod permute;
+#[cfg(feature = "svg")]
+mod render;
+mod spec;
+
+pub use builtin::{BUILTIN_NAMES, BUILTIN_SPECS, POINT_CALCULI, builtin_spec};
+pub use calculus::{Calculus, StateId};
+pub use compose::{ComposeOptions, ComposeTable};
+pub use error::{QsrError, Result};
+pub use frame::{
+    AnyFrame, DEGENERATE_TOLERANCE, ExtendedFrame, FrameKind, OrientedFrame, Segment, TernaryFrame,
+};
+pub use merge::MergeMap;
+pub use neighbours::NeighbourGraph;
+pub use partition::{ConstraintPartition, Partition, ROUNDING_MARGIN, RasterPartition};
+pub use permute::{Permutation, PermutationTable};
+#[cfg(feature = "svg")]
+pub use render::{RenderOptions, render_svg};
+pub use spec::{
+    CalculusSpec, ConstraintSpec, MAX_CONSTRAINTS, OutsideRule, RasterSpec, Shape, Side, StateSpec,
+};
+
+/// Re-exported so users need not depend on nalgebra to call the API.
+pub use nalgebra::Point2;

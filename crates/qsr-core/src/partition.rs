@@ -1,0 +1,270 @@
+//! Compiled partitions of the normalised plane: classification is a pure function from a
+//! normalised point to a state index.
+//!
+//! - [`ConstraintPartition`]: sign vector of the constraints → base cell → state through a
+//!   `2^k` table. Sign vectors that no spec pattern claims and that the validation sampler
+//!   never met take the state of the nearest claimed vector (fewest differing signs, lowest
+//!   index on ties), so classification is total even for a vector the sampler missed.
+//! - [`RasterPartition`]: a label raster over a window plus an [`OutsideRule`].
+
+use nalgebra::Point2;
+
+use crate::spec::{OutsideRule, RasterSpec, Shape, Side};
+
+/// Sign-vector classification by lines and circles.
+#[derive(Debug, Clone)]
+pub struct ConstraintPartition {
+    /// `(a, b, c, bit, zero_positive)` of each line.
+    lines: Vec<([f64; 3], u32, bool)>,
+    /// `(cx, cy, r², bit, zero_positive)` of each circle.
+    circles: Vec<([f64; 3], u32, bool)>,
+    shapes: Vec<Shape>,
+    table: Vec<u16>,
+}
+
+impl ConstraintPartition {
+    /// Compiles constraints and a (complete) `2^k` table.
+    pub(crate) fn new(constraints: &[(Shape, Side)], table: Vec<u16>) -> Self {
+        let mut lines = Vec::new();
+        let mut circles = Vec::new();
+        for (i, (shape, zero)) in constraints.iter().enumerate() {
+            let pos = *zero == Side::Positive;
+            match *shape {
+                Shape::Line { a, b, c } => lines.push(([a, b, c], i as u32, pos)),
+                Shape::Circle { center, radius } => {
+                    circles.push(([center[0], center[1], radius * radius], i as u32, pos));
+                }
+            }
+        }
+        Self {
+            lines,
+            circles,
+            shapes: constraints.iter().map(|(s, _)| *s).collect(),
+            table,
+        }
+    }
+
+    /// The sign vector of a point (bit i set when constraint i is on its positive side).
+    #[inline(always)]
+    #[must_use]
+    pub fn sign_vector(&self, x: f64, y: f64) -> u32 {
+        let mut v = 0u32;
+        for &([a, b, c], bit, pos) in &self.lines {
+            let f = a * x + b * y + c;
+            let s = if pos { f >= 0.0 } else { f > 0.0 };
+            v |= u32::from(s) << bit;
+        }
+        for &([cx, cy, r2], bit, pos) in &self.circles {
+            let dx = x - cx;
+            let dy = y - cy;
+            let f = dx * dx + dy * dy - r2;
+            let s = if pos { f >= 0.0 } else { f > 0.0 };
+            v |= u32::from(s) << bit;
+        }
+        v
+    }
+
+    /// State index of a normalised point.
+    #[inline(always)]
+    #[must_use]
+    pub fn classify(&self, x: f64, y: f64) -> u16 {
+        self.table[self.sign_vector(x, y) as usize]
+    }
+
+    /// The constraint curves, in spec order.
+    #[must_use]
+    pub fn shapes(&self) -> &[Shape] {
+        &self.shapes
+    }
+
+    /// The full `2^k` base-cell → state table.
+    #[must_use]
+    pub fn table(&self) -> &[u16] {
+        &self.table
+    }
+}
+
+/// Relative distance below which a point's side of a curve is decided by rounding.
+pub const ROUNDING_MARGIN: f64 = 1e-10;
+
+impl Partition {
+    /// Whether f64 rounding can decide the state of `p`: it lies within
+    /// `ROUNDING_MARGIN · scale` of a circle or a raster cell edge, or of a line without
+    /// being exactly on it. `scale` should bound the magnitudes `p` was computed from.
+    ///
+    /// Points exactly on a line are *not* ambiguous: the spec's zero-set rule decides them
+    /// and the arithmetic that puts them there (dyadic coordinates) is exact.
+    #[must_use]
+    pub fn is_ambiguous(&self, p: &Point2<f64>, scale: f64) -> bool {
+        self.near_boundary(p, scale, false)
+    }
+
+    /// [`Partition::is_ambiguous`], and with `exact_lines_too` also points exactly on a line:
+    /// true for every point that is not in general position.
+    #[must_use]
+    pub fn near_boundary(&self, p: &Point2<f64>, scale: f64, exact_lines_too: bool) -> bool {
+        let tol = ROUNDING_MARGIN * scale.max(1.0);
+        match self {
+            Self::Constraints(c) => c.shapes.iter().any(|s| match *s {
+                Shape::Line { a, b, c } => {
+                    let f = a * p.x + b * p.y + c;
+                    (exact_lines_too || f != 0.0) && f.abs() < tol * a.hypot(b)
+                }
+                Shape::Circle { center, radius } => {
+                    ((p.x - center[0]).hypot(p.y - center[1]) - radius).abs() < tol
+                }
+            }),
+            Self::Raster(r) => {
+                let fx = (p.x - r.x0) / r.dx;
+                let fy = (p.y - r.y0) / r.dy;
+                let near = |f: f64, d: f64| (f - f.round()).abs() * d < tol;
+                near(fx, r.dx) || near(fy, r.dy)
+            }
+        }
+    }
+}
+
+/// Fills unclaimed table entries with the state of the nearest claimed sign vector.
+pub(crate) fn complete_table(table: &mut [u16]) {
+    let claimed: Vec<(u32, u16)> = table
+        .iter()
+        .enumerate()
+        .filter(|(_, s)| **s != u16::MAX)
+        .map(|(v, s)| (v as u32, *s))
+        .collect();
+    for (v, slot) in table.iter_mut().enumerate() {
+        if *slot == u16::MAX
+            && let Some(&(_, s)) = claimed
+                .iter()
+                .min_by_key(|(w, _)| ((*w ^ v as u32).count_ones(), *w))
+        {
+            *slot = s;
+        }
+    }
+}
+
+/// A label raster over a window of the normalised plane.
+#[derive(Debug, Clone)]
+pub struct RasterPartition {
+    x0: f64,
+    y0: f64,
+    dx: f64,
+    dy: f64,
+    nx: usize,
+    ny: usize,
+    cells: Vec<u16>,
+    outside: Option<u16>,
+}
+
+impl RasterPartition {
+    /// Compiles a validated raster spec; `outside_state` resolves an
+    /// [`OutsideRule::State`] label.
+    pub(crate) fn new(spec: &RasterSpec, outside_state: Option<u16>) -> Self {
+        let [x0, x1, y0, y1] = spec.window;
+        Self {
+            x0,
+            y0,
+            dx: (x1 - x0) / spec.nx as f64,
+            dy: (y1 - y0) / spec.ny as f64,
+            nx: spec.nx,
+            ny: spec.ny,
+            cells: spec.cells.clone(),
+            outside: match spec.outside {
+                OutsideRule::Clamp => None,
+                OutsideRule::State { .. } => outside_state,
+            },
+        }
+    }
+
+    /// State index of a normalised point.
+    #[inline(always)]
+    #[must_use]
+    pub fn classify(&self, x: f64, y: f64) -> u16 {
+        let fx = ((x - self.x0) / self.dx).floor();
+        let fy = ((y - self.y0) / self.dy).floor();
+        let inside = fx >= 0.0 && fy >= 0.0 && fx < self.nx as f64 && fy < self.ny as f64;
+        if !inside && let Some(s) = self.outside {
+            return s;
+        }
+        // Clamp (also guards the last-cell edge case x == x_max).
+        let ix = fx.clamp(0.0, (self.nx - 1) as f64) as usize;
+        let iy = fy.clamp(0.0, (self.ny - 1) as f64) as usize;
+        self.cells[iy * self.nx + ix]
+    }
+
+    /// `(nx, ny)`.
+    #[must_use]
+    pub fn shape(&self) -> (usize, usize) {
+        (self.nx, self.ny)
+    }
+
+    /// `[x_min, x_max, y_min, y_max]`.
+    #[must_use]
+    pub fn window(&self) -> [f64; 4] {
+        [
+            self.x0,
+            self.x0 + self.dx * self.nx as f64,
+            self.y0,
+            self.y0 + self.dy * self.ny as f64,
+        ]
+    }
+
+    /// Cell size `(dx, dy)`.
+    #[must_use]
+    pub fn cell_size(&self) -> (f64, f64) {
+        (self.dx, self.dy)
+    }
+
+    /// Label of cell `(ix, iy)`.
+    #[must_use]
+    pub fn cell(&self, ix: usize, iy: usize) -> u16 {
+        self.cells[iy * self.nx + ix]
+    }
+
+    /// The fixed outside state, if the rule is [`OutsideRule::State`].
+    #[must_use]
+    pub fn outside_state(&self) -> Option<u16> {
+        self.outside
+    }
+
+    /// Lower-left corner of cell `(ix, iy)`.
+    #[must_use]
+    pub fn cell_origin(&self, ix: usize, iy: usize) -> Point2<f64> {
+        Point2::new(self.x0 + ix as f64 * self.dx, self.y0 + iy as f64 * self.dy)
+    }
+}
+
+/// A compiled partition of either kind.
+#[derive(Debug, Clone)]
+pub enum Partition {
+    /// Lines and circles with a sign-vector table.
+    Constraints(ConstraintPartition),
+    /// A label raster.
+    Raster(RasterPartition),
+}
+
+impl Partition {
+    /// State index of a normalised point.
+    #[inline(always)]
+    #[must_use]
+    pub fn classify(&self, p: &Point2<f64>) -> u16 {
+        match self {
+            Self::Constraints(c) => c.classify(p.x, p.y),
+            Self::Raster(r) => r.classify(p.x, p.y),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn unclaimed_vectors_take_the_nearest_claimed_state() {
+        let mut t = vec![0, u16::MAX, u16::MAX, 3];
+        complete_table(&mut t);
+        // 0b01 is one flip from 0b00 (state 0) and from 0b11 (state 3); ties go to the
+        // lower vector.
+        assert_eq!(t, vec![0, 0, 0, 3]);
+    }
+}

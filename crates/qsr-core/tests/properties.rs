@@ -1,0 +1,133 @@
+//! Property tests of classification (issue: "a state is invariant under rotating,
+//! translating and scaling all three points together; every point gets exactly one state;
+//! merges commute with classification").
+#![allow(clippy::unwrap_used)] // tests: a panic is the failure report
+
+mod common;
+
+use proptest::prelude::*;
+use qsr_core::{Calculus, POINT_CALCULI, Partition, Point2, TernaryFrame};
+
+fn point_calculi() -> Vec<Calculus> {
+    POINT_CALCULI
+        .iter()
+        .map(|n| Calculus::builtin(n).unwrap())
+        .collect()
+}
+
+/// EDC → each coarser point calculus, computed once for all cases.
+fn merges() -> &'static [(Calculus, qsr_core::MergeMap)] {
+    static MERGES: std::sync::OnceLock<Vec<(Calculus, qsr_core::MergeMap)>> =
+        std::sync::OnceLock::new();
+    MERGES.get_or_init(|| {
+        let edc = Calculus::builtin("edc").unwrap();
+        POINT_CALCULI[1..]
+            .iter()
+            .map(|n| {
+                let coarse = Calculus::builtin(n).unwrap();
+                let m = edc.merge_map(&coarse).unwrap();
+                (coarse, m)
+            })
+            .collect()
+    })
+}
+
+/// Normalised points that reach far, near and exactly-on-boundary places.
+fn normalised_point() -> impl Strategy<Value = Point2<f64>> {
+    prop_oneof![
+        (-3.0..3.0f64, -2.0..3.0f64).prop_map(|(x, y)| Point2::new(x, y)),
+        (-6.0..6.0f64, 0.0..std::f64::consts::TAU).prop_map(|(e, th)| {
+            let r = 10f64.powf(e);
+            Point2::new(r * th.cos(), r * th.sin())
+        }),
+        (
+            0usize..6,
+            -4.0..4.0f64,
+            prop_oneof![Just(0.0), -1e-3..1e-3f64]
+        )
+            .prop_map(|(w, t, o)| common::near_edc_curve(w, t, o)),
+    ]
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(2000))]
+
+    #[test]
+    fn state_is_invariant_under_similarity(
+        q in normalised_point(),
+        (ax, ay) in (-1e3..1e3f64, -1e3..1e3f64),
+        angle in 0.0..std::f64::consts::TAU,
+        log_scale in -3.0..4.0f64,
+        (theta2, log_scale2, tx, ty) in (0.0..std::f64::consts::TAU, -3.0..3.0f64, -1e3..1e3f64, -1e3..1e3f64),
+    ) {
+        for calc in point_calculi() {
+            // Skip points within rounding distance of a boundary: there the side is decided by
+            // the last bit and no implementation is invariant.
+            prop_assume!(common::boundary_distance(&calc, &q) > 1e-6 * q.coords.norm().max(1.0));
+            let s = 10f64.powf(log_scale);
+            let (sin, cos) = angle.sin_cos();
+            let a = Point2::new(ax, ay);
+            let b = Point2::new(ax - s * sin, ay + s * cos);
+            let frame = TernaryFrame::new(a, b).unwrap();
+            let c = frame.to_world(&q);
+            let expected = calc.classify_normalised(&q);
+            prop_assert_eq!(calc.classify_triplet(a, b, c).unwrap(), expected);
+            // A second similarity applied to all three points.
+            let s2 = 10f64.powf(log_scale2);
+            let (sin2, cos2) = theta2.sin_cos();
+            let m = |p: Point2<f64>| Point2::new(s2 * (cos2 * p.x - sin2 * p.y) + tx, s2 * (sin2 * p.x + cos2 * p.y) + ty);
+            prop_assert_eq!(calc.classify_triplet(m(a), m(b), m(c)).unwrap(), expected, "calculus {}", calc.name());
+        }
+    }
+
+    #[test]
+    fn every_point_gets_exactly_one_state(q in normalised_point()) {
+        for calc in point_calculi() {
+            let Partition::Constraints(part) = calc.partition() else { unreachable!() };
+            let v = part.sign_vector(q.x, q.y);
+            let k = calc.spec().constraints.len();
+            let claims: Vec<usize> = calc.spec().states.iter().enumerate()
+                .filter(|(_, st)| st.cells.iter().any(|pat| pattern_matches(pat, v, k)))
+                .map(|(i, _)| i)
+                .collect();
+            prop_assert_eq!(claims.len(), 1, "{}: point {:?} (vector {:b}) claimed by {:?}", calc.name(), q, v, claims);
+            prop_assert_eq!(calc.classify_normalised(&q).index(), claims[0]);
+        }
+    }
+
+    #[test]
+    fn merges_commute_with_classification(q in normalised_point()) {
+        let edc = Calculus::builtin("edc").unwrap();
+        let fine = edc.classify_normalised(&q);
+        for (coarse, merge) in merges() {
+            prop_assert_eq!(merge.apply(fine), coarse.classify_normalised(&q), "edc -> {}", coarse.name());
+        }
+    }
+}
+
+fn pattern_matches(pat: &str, v: u32, k: usize) -> bool {
+    pat.len() == k
+        && pat.chars().enumerate().all(|(i, ch)| match ch {
+            '+' => v & (1 << i) != 0,
+            '-' => v & (1 << i) == 0,
+            _ => true,
+        })
+}
+
+#[test]
+fn merged_distribution_sums_fine_probabilities() {
+    let edc = Calculus::builtin("edc").unwrap();
+    let dc = Calculus::builtin("double-cross").unwrap();
+    let m = edc.merge_map(&dc).unwrap();
+    let p: Vec<f64> = (1..=20).map(f64::from).map(|v| v / 210.0).collect();
+    let q = m.merge_distribution(&p).unwrap();
+    assert!((q.iter().sum::<f64>() - 1.0).abs() < 1e-12);
+    // left-front of the double cross = EDC 1 + 3 (left, y >= 1).
+    let lf = dc.state("left-front").unwrap().index();
+    assert!((q[lf] - (1.0 + 3.0) / 210.0).abs() < 1e-12);
+    // A coarser calculus does not refine a finer one.
+    assert!(matches!(
+        dc.merge_map(&edc),
+        Err(qsr_core::QsrError::NotARefinement { .. })
+    ));
+}
