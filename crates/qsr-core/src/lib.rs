@@ -49,10 +49,14 @@
 //! use qsr_core::{Calculus, Permutation};
 //!
 //! let dc = Calculus::builtin("double-cross")?;
-//! let inv = dc.permutation(Permutation::Inverse)?;
 //! let lf = dc.state("left-front")?;
-//! // Seen from B looking at A, what was left-front of A→B is right-back.
-//! assert_eq!(inv.get(lf), &[dc.state("right-back")?]);
+//! // In general position, what is left-front of A→B is right-back of B→A ...
+//! let generic = dc.permutation_with(Permutation::Inverse, false)?;
+//! assert_eq!(generic.get(lf), &[dc.state("right-back")?]);
+//! // ... and the table sound for every configuration adds the boundary case: C exactly on
+//! // the perpendicular at B is "front" of A→B (y >= 1) but "middle" of B→A (y' = 0).
+//! let sound = dc.permutation(Permutation::Inverse)?;
+//! assert_eq!(sound.get(lf), &[dc.state("right-middle")?, dc.state("right-back")?]);
 //! # Ok::<(), qsr_core::QsrError>(())
 //! ```
 
