@@ -54,6 +54,21 @@ def edc_numpy(t: np.ndarray) -> np.ndarray:
     return lab
 
 
+def check_against_qrm(t: np.ndarray) -> None:
+    """Both sides must compute the same thing: compare labels with `qrm calculus classify`."""
+    exe = ROOT / "target" / "release" / "qrm"
+    if not exe.exists():
+        subprocess.run(["cargo", "build", "--release", "-q"], cwd=ROOT, check=True)
+    text = "\n".join(" ".join(f"{v:.17g}" for v in row) for row in t)
+    out = subprocess.run([str(exe), "calculus", "classify", "edc"], input=text, text=True,
+                         capture_output=True, check=True).stdout.split()
+    ours = np.array([int(x) for x in out])
+    agree = np.mean(ours == edc_numpy(t))
+    print(f"numpy and qrm agree on {agree:.4%} of {len(t)} triplets")
+    if agree < 1.0:
+        sys.exit("the NumPy rule and qrm disagree: the comparison would be meaningless")
+
+
 def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--skip-cargo", action="store_true", help="reuse the last criterion result")
@@ -61,7 +76,7 @@ def main() -> None:
     args = ap.parse_args()
     rng = np.random.default_rng(7)
     t = rng.uniform(0.0, 100.0, size=(args.n, 6))
-    edc_numpy(t[:1000])
+    check_against_qrm(t[:20000])
     best = float("inf")
     for _ in range(3):
         t0 = time.perf_counter()

@@ -12,7 +12,7 @@ use crate::error::{QsrError, Result, spec_error};
 use crate::frame::{AnyFrame, ExtendedFrame, FrameKind, OrientedFrame, Segment, TernaryFrame};
 use crate::merge::MergeMap;
 use crate::neighbours::NeighbourGraph;
-use crate::partition::{ConstraintPartition, Partition, RasterPartition, complete_table};
+use crate::partition::{BLOCK, ConstraintPartition, Partition, RasterPartition, complete_table};
 use crate::permute::{Permutation, PermutationTable};
 use crate::spec::{CalculusSpec, OutsideRule, RasterSpec, format_vector, pattern_table};
 
@@ -324,10 +324,7 @@ impl Calculus {
                 out.len()
             )));
         }
-        match &self.partition {
-            Partition::Constraints(c) => classify_rows(triplets, out, |x, y| c.classify(x, y)),
-            Partition::Raster(r) => classify_rows(triplets, out, |x, y| r.classify(x, y)),
-        }
+        classify_rows(&self.partition, triplets, out)
     }
 
     pub(crate) fn features(&self) -> &Features {
@@ -473,32 +470,64 @@ impl Calculus {
     }
 }
 
-#[inline(always)]
-fn classify_rows(
-    triplets: &[[f64; 6]],
-    out: &mut [StateId],
-    classify: impl Fn(f64, f64) -> u16,
-) -> Result<()> {
-    for (i, (t, o)) in triplets.iter().zip(out.iter_mut()).enumerate() {
-        let [ax, ay, bx, by, cx, cy] = *t;
-        let dx = bx - ax;
-        let dy = by - ay;
-        let len2 = dx * dx + dy * dy;
-        let scale = 1f64.max(ax.abs()).max(ay.abs()).max(bx.abs()).max(by.abs());
-        let tol = crate::frame::DEGENERATE_TOLERANCE * scale;
-        // `len2 > tol²` is false for NaN too: one test guards both.
-        let valid = len2 > tol * tol && cx.is_finite() && cy.is_finite();
-        if !valid {
-            return Err(row_error(i, t));
+/// Classifies rows block by block: normalise [`BLOCK`] triplets (vectorisable: no branch
+/// but the validity check), then hand the block to the partition.
+fn classify_rows(partition: &Partition, triplets: &[[f64; 6]], out: &mut [StateId]) -> Result<()> {
+    let mut xs = [0.0f64; BLOCK];
+    let mut ys = [0.0f64; BLOCK];
+    let mut states = [0u16; BLOCK];
+    for (bi, (rows, outs)) in triplets
+        .chunks(BLOCK)
+        .zip(out.chunks_mut(BLOCK))
+        .enumerate()
+    {
+        let mut valid = true;
+        for ((t, x), y) in rows.iter().zip(xs.iter_mut()).zip(ys.iter_mut()) {
+            let [ax, ay, bx, by, cx, cy] = *t;
+            let (dx, dy) = (bx - ax, by - ay);
+            let len2 = dx * dx + dy * dy;
+            // Coincidence as in `TernaryFrame::new` but with the scale bounded by squares
+            // (branch-free, vectorisable): |AB|² ≤ tol² · (1 + |A|² + |B|²).
+            let scale2 = 1.0 + ax * ax + ay * ay + bx * bx + by * by;
+            let tol2 = crate::frame::DEGENERATE_TOLERANCE * crate::frame::DEGENERATE_TOLERANCE;
+            // `len2 > ...` is false for NaN too: one test guards A and B.
+            valid &= (len2 > tol2 * scale2) & cx.is_finite() & cy.is_finite();
+            let inv = 1.0 / len2;
+            let (vx, vy) = (cx - ax, cy - ay);
+            *x = -(dx * vy - dy * vx) * inv;
+            *y = (dx * vx + dy * vy) * inv;
         }
-        let inv = 1.0 / len2;
-        let vx = cx - ax;
-        let vy = cy - ay;
-        let x = -(dx * vy - dy * vx) * inv;
-        let y = (dx * vx + dy * vy) * inv;
-        *o = StateId(classify(x, y));
+        if !valid {
+            let (i, t) = rows
+                .iter()
+                .enumerate()
+                .find(|(_, t)| classify_rows_one_invalid(t))
+                .unwrap_or((0, &rows[0]));
+            return Err(row_error(bi * BLOCK + i, t));
+        }
+        let n = rows.len();
+        match partition {
+            Partition::Constraints(c) => c.classify_block(&xs[..n], &ys[..n], &mut states[..n]),
+            Partition::Raster(r) => {
+                for ((s, x), y) in states[..n].iter_mut().zip(&xs[..n]).zip(&ys[..n]) {
+                    *s = r.classify(*x, *y);
+                }
+            }
+        }
+        for (o, s) in outs.iter_mut().zip(&states[..n]) {
+            *o = StateId(*s);
+        }
     }
     Ok(())
+}
+
+fn classify_rows_one_invalid(t: &[f64; 6]) -> bool {
+    let [ax, ay, bx, by, cx, cy] = *t;
+    let (dx, dy) = (bx - ax, by - ay);
+    let scale2 = 1.0 + ax * ax + ay * ay + bx * bx + by * by;
+    let tol2 = crate::frame::DEGENERATE_TOLERANCE * crate::frame::DEGENERATE_TOLERANCE;
+    let valid = dx * dx + dy * dy > tol2 * scale2 && cx.is_finite() && cy.is_finite();
+    !valid
 }
 
 fn row_error(i: usize, t: &[f64; 6]) -> QsrError {

@@ -22,9 +22,10 @@ use crate::error::{QsrError, Result, check_finite};
 
 /// Relative tolerance below which two reference points count as coincident.
 ///
-/// Points `A` and `B` are coincident when `|B − A| ≤ DEGENERATE_TOLERANCE · max(1, ‖A‖∞, ‖B‖∞)`:
+/// Points `A` and `B` are coincident when `|B − A|² ≤ DEGENERATE_TOLERANCE² · (1 + |A|² + |B|²)`:
 /// relative for large coordinates (where f64 cannot resolve smaller differences anyway) and
-/// absolute (1e-9 of a unit) near the origin.
+/// absolute (1e-9 of a unit) near the origin. Written with squares so that the batch path
+/// ([`crate::Calculus::classify_triplets`]) applies exactly the same test without branches.
 pub const DEGENERATE_TOLERANCE: f64 = 1e-9;
 
 /// Which kind of reference frame a calculus is written in.
@@ -112,13 +113,10 @@ fn denormalise(origin: &Point2<f64>, axis: &Vector2<f64>, q: &Point2<f64>) -> Po
     )
 }
 
-fn coincident(a: &Point2<f64>, b: &Point2<f64>) -> bool {
-    let scale = 1f64
-        .max(a.x.abs())
-        .max(a.y.abs())
-        .max(b.x.abs())
-        .max(b.y.abs());
-    (b - a).norm() <= DEGENERATE_TOLERANCE * scale
+pub(crate) fn coincident(a: &Point2<f64>, b: &Point2<f64>) -> bool {
+    let scale2 = 1.0 + a.coords.norm_squared() + b.coords.norm_squared();
+    let d2 = (b - a).norm_squared();
+    d2.is_nan() || d2 <= DEGENERATE_TOLERANCE * DEGENERATE_TOLERANCE * scale2
 }
 
 /// The ternary point frame `{A, B : ·}`: A ↦ (0, 0), B ↦ (0, 1).

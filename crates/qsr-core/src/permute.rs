@@ -32,6 +32,7 @@ use rayon::prelude::*;
 use crate::calculus::{Calculus, StateId};
 use crate::error::QsrError;
 use crate::frame::TernaryFrame;
+pub(crate) use crate::frame::coincident;
 
 /// One of the five permutation operations.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -170,17 +171,6 @@ impl PermutationTable {
     pub fn rows(&self) -> &[Vec<StateId>] {
         &self.table
     }
-}
-
-/// Whether two points coincide in the sense of [`crate::DEGENERATE_TOLERANCE`].
-#[inline]
-pub(crate) fn coincident(p: &Point2<f64>, q: &Point2<f64>) -> bool {
-    let scale = 1f64
-        .max(p.x.abs())
-        .max(p.y.abs())
-        .max(q.x.abs())
-        .max(q.y.abs());
-    (p - q).norm() <= crate::DEGENERATE_TOLERANCE * scale
 }
 
 pub(crate) fn or_matrix(mut x: Vec<Vec<bool>>, y: Vec<Vec<bool>>) -> Vec<Vec<bool>> {

@@ -131,3 +131,38 @@ fn merged_distribution_sums_fine_probabilities() {
         Err(qsr_core::QsrError::NotARefinement { .. })
     ));
 }
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(300))]
+
+    /// The blocked, branch-free batch path (the mapping hot loop) agrees with the scalar API,
+    /// errors included, for any batch length (block remainders) and any calculus kind.
+    #[test]
+    fn batch_classification_equals_scalar(
+        rows in proptest::collection::vec(proptest::array::uniform6(-50.0..50.0f64), 0..200),
+        bad in proptest::option::of((0usize..200, 0usize..3)),
+    ) {
+        let mut rows = rows;
+        if let Some((i, kind)) = bad {
+            if i < rows.len() {
+                match kind {
+                    0 => rows[i][4] = f64::NAN,
+                    1 => { rows[i][2] = rows[i][0]; rows[i][3] = rows[i][1]; }
+                    _ => rows[i][0] = f64::INFINITY,
+                }
+            }
+        }
+        let edc = Calculus::builtin("edc").unwrap();
+        let raster = edc.rasterise([-3.0, 3.0, -2.0, 3.0], 60, 50, qsr_core::OutsideRule::Clamp).unwrap();
+        for calc in [&edc, &raster] {
+            let mut out = vec![qsr_core::StateId(0); rows.len()];
+            let batch = calc.classify_triplets(&rows, &mut out);
+            let scalar: Result<Vec<_>, _> = rows.iter().map(|r| calc.classify_row(r)).collect();
+            match (batch, scalar) {
+                (Ok(()), Ok(s)) => prop_assert_eq!(out, s),
+                (Err(_), Err(_)) => {}
+                (b, s) => prop_assert!(false, "batch {:?} vs scalar {:?}", b, s.map(|_| ())),
+            }
+        }
+    }
+}
