@@ -143,15 +143,14 @@ proptest! {
         bad in proptest::option::of((0usize..200, 0usize..3)),
     ) {
         let mut rows = rows;
-        if let Some((i, kind)) = bad {
-            if i < rows.len() {
+        if let Some((i, kind)) = bad
+            && i < rows.len() {
                 match kind {
                     0 => rows[i][4] = f64::NAN,
                     1 => { rows[i][2] = rows[i][0]; rows[i][3] = rows[i][1]; }
                     _ => rows[i][0] = f64::INFINITY,
                 }
             }
-        }
         let edc = Calculus::builtin("edc").unwrap();
         let raster = edc.rasterise([-3.0, 3.0, -2.0, 3.0], 60, 50, qsr_core::OutsideRule::Clamp).unwrap();
         for calc in [&edc, &raster] {
