@@ -327,6 +327,102 @@ impl Calculus {
         classify_rows(&self.partition, triplets, out)
     }
 
+    /// State indices of many points already in normalised coordinates (`xs`, `ys`, `out` of
+    /// equal length; extra entries of the longer slices are ignored). No validation: the
+    /// caller computed the points, as the mapper does when it derives all six orderings of a
+    /// triplet from one normalised position.
+    pub fn classify_normalised_into(&self, xs: &[f64], ys: &[f64], out: &mut [u16]) {
+        match &self.partition {
+            Partition::Constraints(p) => p.classify_block(xs, ys, out),
+            Partition::Raster(r) => {
+                for ((s, x), y) in out.iter_mut().zip(xs).zip(ys) {
+                    *s = r.classify(*x, *y);
+                }
+            }
+        }
+    }
+
+    /// Classifies `n` configurations given as columns (`a = (ax, ay)` etc., each of length
+    /// `n = out.len()`): how a sampler hands over its samples, with no row assembly.
+    ///
+    /// # Errors
+    /// As [`Calculus::classify_triplets`].
+    pub fn classify_columns(
+        &self,
+        a: (&[f64], &[f64]),
+        b: (&[f64], &[f64]),
+        c: (&[f64], &[f64]),
+        out: &mut [StateId],
+    ) -> Result<()> {
+        self.expect_frame(FrameKind::Ternary)?;
+        let n = out.len();
+        let lens = [
+            a.0.len(),
+            a.1.len(),
+            b.0.len(),
+            b.1.len(),
+            c.0.len(),
+            c.1.len(),
+        ];
+        if lens.iter().any(|&l| l != n) {
+            return Err(QsrError::Arity(format!(
+                "column lengths {lens:?} differ from the output length {n}"
+            )));
+        }
+        let mut xs = [0.0f64; BLOCK];
+        let mut ys = [0.0f64; BLOCK];
+        let mut states = [0u16; BLOCK];
+        for start in (0..n).step_by(BLOCK) {
+            let end = (start + BLOCK).min(n);
+            let m = end - start;
+            let cols = (
+                &a.0[start..end],
+                &a.1[start..end],
+                &b.0[start..end],
+                &b.1[start..end],
+                &c.0[start..end],
+                &c.1[start..end],
+            );
+            let mut valid = true;
+            for i in 0..m {
+                let (ax, ay, bx, by, cx, cy) = (
+                    cols.0[i], cols.1[i], cols.2[i], cols.3[i], cols.4[i], cols.5[i],
+                );
+                let (dx, dy) = (bx - ax, by - ay);
+                let len2 = dx * dx + dy * dy;
+                let scale2 = 1.0 + ax * ax + ay * ay + bx * bx + by * by;
+                let tol2 = crate::frame::DEGENERATE_TOLERANCE * crate::frame::DEGENERATE_TOLERANCE;
+                valid &= (len2 > tol2 * scale2) & cx.is_finite() & cy.is_finite();
+                let inv = 1.0 / len2;
+                let (vx, vy) = (cx - ax, cy - ay);
+                xs[i] = -(dx * vy - dy * vx) * inv;
+                ys[i] = (dx * vx + dy * vy) * inv;
+            }
+            if !valid {
+                for i in 0..m {
+                    let row = [
+                        cols.0[i], cols.1[i], cols.2[i], cols.3[i], cols.4[i], cols.5[i],
+                    ];
+                    if classify_rows_one_invalid(&row) {
+                        return Err(row_error(start + i, &row));
+                    }
+                }
+            }
+            match &self.partition {
+                Partition::Constraints(p) => p.classify_block(&xs[..m], &ys[..m], &mut states[..m]),
+                Partition::Raster(r) => {
+                    for ((s, x), y) in states[..m].iter_mut().zip(&xs[..m]).zip(&ys[..m]) {
+                        *s = r.classify(*x, *y);
+                    }
+                }
+            }
+            for (o, s) in out[start..end].iter_mut().zip(&states[..m]) {
+                *o = StateId(*s);
+            }
+        }
+        Ok(())
+    }
+
     pub(crate) fn features(&self) -> &Features {
         &self.features
     }

@@ -61,6 +61,12 @@ impl MergeMap {
         self.map[fine.index()]
     }
 
+    /// Number of states of the coarse calculus.
+    #[must_use]
+    pub fn n_coarse(&self) -> usize {
+        self.n_coarse
+    }
+
     /// The map as a slice indexed by fine state.
     #[must_use]
     pub fn as_slice(&self) -> &[StateId] {

@@ -14,8 +14,10 @@ use crate::spec::{OutsideRule, RasterSpec, Shape, Side};
 /// Sign-vector classification by lines and circles.
 #[derive(Debug, Clone)]
 pub struct ConstraintPartition {
-    /// `(a, b, c, bit, zero_positive)` of each line.
+    /// `(a, b, c, bit, zero_positive)` of each general line.
     lines: Vec<([f64; 3], u32, bool)>,
+    /// Lines `x + c` and `y + c` as one comparison: `(axis (0 = x, 1 = y), −c, bit, ≥ or >)`.
+    thresholds: Vec<(usize, f64, u32, bool)>,
     /// `(cx, cy, r², bit, zero_positive)` of each circle.
     circles: Vec<([f64; 3], u32, bool)>,
     shapes: Vec<Shape>,
@@ -26,10 +28,16 @@ impl ConstraintPartition {
     /// Compiles constraints and a (complete) `2^k` table.
     pub(crate) fn new(constraints: &[(Shape, Side)], table: Vec<u16>) -> Self {
         let mut lines = Vec::new();
+        let mut thresholds = Vec::new();
         let mut circles = Vec::new();
         for (i, (shape, zero)) in constraints.iter().enumerate() {
             let pos = *zero == Side::Positive;
             match *shape {
+                // `u + c ≥ 0` ⇔ `u ≥ −c` exactly in IEEE arithmetic (a rounded sum is zero only
+                // when the exact sum is, and keeps its sign), so lines `x + c` and `y + c` (all
+                // the built-ins' lines) become one comparison with identical results.
+                Shape::Line { a: 1.0, b: 0.0, c } => thresholds.push((0, -c, i as u32, pos)),
+                Shape::Line { a: 0.0, b: 1.0, c } => thresholds.push((1, -c, i as u32, pos)),
                 Shape::Line { a, b, c } => lines.push(([a, b, c], i as u32, pos)),
                 Shape::Circle { center, radius } => {
                     circles.push(([center[0], center[1], radius * radius], i as u32, pos));
@@ -38,6 +46,7 @@ impl ConstraintPartition {
         }
         Self {
             lines,
+            thresholds,
             circles,
             shapes: constraints.iter().map(|(s, _)| *s).collect(),
             table,
@@ -51,6 +60,11 @@ impl ConstraintPartition {
         // Branch-free: the sign of f is random data, so a branch per constraint would be
         // mispredicted half the time (it cost 3x in the classification benchmark).
         let mut v = 0u32;
+        for &(axis, t, bit, pos) in &self.thresholds {
+            let u = if axis == 0 { x } else { y };
+            let s = u32::from(u > t) | (u32::from(u == t) & u32::from(pos));
+            v |= s << bit;
+        }
         for &([a, b, c], bit, pos) in &self.lines {
             let f = a * x + b * y + c;
             let s = u32::from(f > 0.0) | (u32::from(f == 0.0) & u32::from(pos));
@@ -88,6 +102,15 @@ impl ConstraintPartition {
             let bv = &mut v[..end - start];
             bv.fill(0);
             // The zero-set side is chosen once per constraint and block, outside the loop.
+            for &(axis, t, bit, pos) in &self.thresholds {
+                let coords = if axis == 0 { bx } else { by };
+                let points = bv.iter_mut().zip(coords);
+                if pos {
+                    points.for_each(|(vi, &u)| *vi |= u64::from(u >= t) << bit);
+                } else {
+                    points.for_each(|(vi, &u)| *vi |= u64::from(u > t) << bit);
+                }
+            }
             for &([a, b, c], bit, pos) in &self.lines {
                 let points = bv.iter_mut().zip(bx).zip(by);
                 if pos {

@@ -165,3 +165,38 @@ proptest! {
         }
     }
 }
+
+#[test]
+fn column_classification_equals_row_classification() {
+    use rand::{RngExt, SeedableRng};
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(4);
+    let rows: Vec<[f64; 6]> = (0..1000)
+        .map(|_| std::array::from_fn(|_| rng.random_range(-5.0..5.0)))
+        .collect();
+    let col = |k: usize| rows.iter().map(|r| r[k]).collect::<Vec<f64>>();
+    let cols: Vec<Vec<f64>> = (0..6).map(col).collect();
+    let edc = Calculus::builtin("edc").unwrap();
+    let mut by_rows = vec![qsr_core::StateId(0); rows.len()];
+    let mut by_cols = by_rows.clone();
+    edc.classify_triplets(&rows, &mut by_rows).unwrap();
+    edc.classify_columns(
+        (&cols[0], &cols[1]),
+        (&cols[2], &cols[3]),
+        (&cols[4], &cols[5]),
+        &mut by_cols,
+    )
+    .unwrap();
+    assert_eq!(by_rows, by_cols);
+    let mut bad = cols.clone();
+    bad[2][700] = bad[0][700];
+    bad[3][700] = bad[1][700];
+    let err = edc
+        .classify_columns(
+            (&bad[0], &bad[1]),
+            (&bad[2], &bad[3]),
+            (&bad[4], &bad[5]),
+            &mut by_cols,
+        )
+        .unwrap_err();
+    assert!(format!("{err}").contains("triplet 700"), "{err}");
+}

@@ -1,0 +1,51 @@
+//! One PQRM step as in the Monte Carlo study: 10 landmarks, s = 1000 samples each, every
+//! ordered triplet (720) classified in the EDC and histogrammed — 720,000 triplet-samples.
+//! Measured on one core and on two; `sampling_numpy.py` beside this file runs the same
+//! computation in NumPy and prints the ratio.
+
+use criterion::{Criterion, Throughput, criterion_group, criterion_main};
+use pqrm::likelihood::{Orderings, step_counts};
+use pqrm::{LandmarkId, Observation, Scan, ScanSamples};
+use qsr_core::Calculus;
+use rand::{RngExt, SeedableRng};
+
+/// Landmarks per step and samples per landmark.
+const M: usize = 10;
+const S: usize = 1000;
+
+fn scan() -> Scan {
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(1);
+    let obs = (0..M)
+        .map(|i| {
+            let p = [rng.random_range(0.0..100.0), rng.random_range(0.0..100.0)];
+            Observation::isotropic(LandmarkId(i as u32), p, 10.0).expect("valid")
+        })
+        .collect();
+    Scan::new(0.0, 0, obs).expect("valid")
+}
+
+fn bench(c: &mut Criterion) {
+    let edc = Calculus::builtin("edc").expect("built in");
+    let scan = scan();
+    let mut g = c.benchmark_group("pqrm_step_m10_s1000");
+    g.sample_size(20);
+    g.throughput(Throughput::Elements((M * (M - 1) * (M - 2) * S) as u64));
+    for threads in [1, 2] {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .expect("pool");
+        g.bench_function(format!("qrm_{threads}_thread"), |b| {
+            b.iter(|| {
+                pool.install(|| {
+                    let samples = ScanSamples::draw(&scan, S, 7, 0);
+                    step_counts(&edc, &samples, Orderings::All).expect("distinct landmarks")
+                })
+            });
+        });
+    }
+    g.finish();
+}
+
+criterion_group!(benches, bench);
+criterion_main!(benches);

@@ -1,0 +1,260 @@
+//! `p(R = q | Z_t)` for landmark sets (thesis eq. 2.9): classify the sampled configurations,
+//! histogram, and turn counts into a distribution with a pseudo-count floor.
+//!
+//! **The floor.** With `α` pseudo-counts per state, `p(q) = (count_q + α) / (s + αQ)`. Without
+//! it (`α = 0`, the thesis's estimator), a state that no sample of one observation hit gets
+//! probability 0, and the Bayes filter multiplies by 0 forever: a single outlier (a
+//! mis-associated landmark, a gross range error) can rule the true state out for good. With
+//! `α > 0` one observation changes a state's odds by at most `(s + α)/α` (≈ 1000 for
+//! `s = 1000`, `α = 1`), so enough later evidence always recovers. The price is that a
+//! perfectly consistent map never reaches probability exactly 1.
+
+use qsr_core::{Calculus, MergeMap, StateId};
+use rayon::prelude::*;
+
+use crate::error::{PqrmError, Result};
+use crate::observation::LandmarkId;
+use crate::sampler::ScanSamples;
+
+/// An ordered landmark set `{A, B : C}`.
+#[derive(
+    Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, serde::Serialize, serde::Deserialize,
+)]
+pub struct LandmarkSet(pub [LandmarkId; 3]);
+
+impl LandmarkSet {
+    /// The set `{a, b : c}`.
+    #[must_use]
+    pub fn new(a: u32, b: u32, c: u32) -> Self {
+        Self([LandmarkId(a), LandmarkId(b), LandmarkId(c)])
+    }
+
+    /// Ids as plain numbers.
+    #[must_use]
+    pub fn ids(&self) -> [u32; 3] {
+        [self.0[0].0, self.0[1].0, self.0[2].0]
+    }
+
+    /// Whether the ids are in increasing order (the canonical ordering of the unordered set).
+    #[must_use]
+    pub fn is_canonical(&self) -> bool {
+        self.0[0] < self.0[1] && self.0[1] < self.0[2]
+    }
+}
+
+/// Which orderings of each observed triplet the map records (thesis §2.3: "m³" vs "C(m,3)").
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Orderings {
+    /// All six orderings (what the thesis reports).
+    All,
+    /// One ordering per unordered set (ids increasing); the other five are derived with the
+    /// calculus's permutation operations when asked for.
+    Canonical,
+}
+
+/// Histogram of the states of `s` sampled configurations of `{A, B : C}`.
+///
+/// # Errors
+/// [`PqrmError::CoincidentLandmarks`] when a sample has A and B coincident (possible only
+/// when two landmarks with zero noise sit on the same spot).
+pub fn set_counts(
+    calculus: &Calculus,
+    samples: &ScanSamples,
+    [i, j, k]: [usize; 3],
+    buffer: &mut Vec<StateId>,
+) -> Result<Vec<u32>> {
+    buffer.clear();
+    buffer.resize(samples.samples(), StateId(0));
+    calculus
+        .classify_columns(
+            samples.columns(i),
+            samples.columns(j),
+            samples.columns(k),
+            buffer,
+        )
+        .map_err(|e| {
+            let ids = samples.ids();
+            PqrmError::CoincidentLandmarks {
+                set: [ids[i].0, ids[j].0, ids[k].0],
+                reason: e.to_string(),
+            }
+        })?;
+    let mut counts = vec![0u32; calculus.n_states()];
+    for s in buffer.iter() {
+        counts[s.index()] += 1;
+    }
+    Ok(counts)
+}
+
+/// Histograms of one step: each landmark set with its state counts.
+pub type StepCounts = Vec<(LandmarkSet, Vec<u32>)>;
+
+/// Samples processed per inner block of [`step_counts`].
+const CHUNK: usize = 256;
+
+/// Counts for every landmark set of one scan.
+///
+/// For each unordered triplet `{i < j < k}` the position `(x, y)` of `k` in the frame of
+/// `(i, j)` is computed once per sample; the other five orderings follow in closed form (with
+/// `n = x² + y²`, `m = x² + (y − 1)²`):
+///
+/// | ordering | normalised position |
+/// |---|---|
+/// | `{i, j : k}` | `(x, y)` |
+/// | `{j, i : k}` (inverse) | `(−x, 1 − y)` |
+/// | `{i, k : j}` (shortcut) | `(−x/n, y/n)` |
+/// | `{k, i : j}` (shortcut-inverse) | `(x/n, 1 − y/n)` |
+/// | `{j, k : i}` (homing) | `(x/m, (1 − y)/m)` |
+/// | `{k, j : i}` (homing-inverse) | `(−x/m, (n − y)/m)` |
+///
+/// so a step costs one frame per unordered triplet instead of six. Parallel over the first
+/// landmark; the result does not depend on the thread count. Sets come out grouped by
+/// unordered triplet, in the order of the table.
+///
+/// # Errors
+/// [`PqrmError::CoincidentLandmarks`] when two landmarks of a triplet coincide in a sample
+/// (within [`qsr_core::DEGENERATE_TOLERANCE`]): possible only with zero noise.
+pub fn step_counts(
+    calculus: &Calculus,
+    samples: &ScanSamples,
+    orderings: Orderings,
+) -> Result<StepCounts> {
+    let ids = samples.ids();
+    let m = ids.len();
+    let per_first: Vec<Result<StepCounts>> = (0..m)
+        .into_par_iter()
+        .map(|i| {
+            let mut out = Vec::new();
+            for j in i + 1..m {
+                for k in j + 1..m {
+                    let counts = triplet_counts(calculus, samples, [i, j, k], orderings)?;
+                    let [a, b, c] = [ids[i], ids[j], ids[k]];
+                    let sets = [
+                        [a, b, c],
+                        [b, a, c],
+                        [a, c, b],
+                        [c, a, b],
+                        [b, c, a],
+                        [c, b, a],
+                    ];
+                    out.extend(
+                        sets.into_iter()
+                            .zip(counts)
+                            .map(|(s, c)| (LandmarkSet(s), c)),
+                    );
+                }
+            }
+            Ok(out)
+        })
+        .collect();
+    let mut all = Vec::new();
+    for r in per_first {
+        all.extend(r?);
+    }
+    Ok(all)
+}
+
+/// Histograms of the orderings of one unordered triplet (six, or one for
+/// [`Orderings::Canonical`]).
+fn triplet_counts(
+    calculus: &Calculus,
+    samples: &ScanSamples,
+    [i, j, k]: [usize; 3],
+    orderings: Orderings,
+) -> Result<Vec<Vec<u32>>> {
+    let q = calculus.n_states();
+    let n_orders = if orderings == Orderings::All { 6 } else { 1 };
+    // Four interleaved sub-histograms per ordering: consecutive samples mostly share a state,
+    // and a single counter would serialise on its own increments.
+    let mut counts = vec![vec![[0u32; 4]; q]; n_orders];
+    let ((ax, ay), (bx, by), (cx, cy)) =
+        (samples.columns(i), samples.columns(j), samples.columns(k));
+    let s = samples.samples();
+    let mut px = [[0.0f64; CHUNK]; 6];
+    let mut py = [[0.0f64; CHUNK]; 6];
+    let mut states = [0u16; CHUNK];
+    let tol2 = qsr_core::DEGENERATE_TOLERANCE * qsr_core::DEGENERATE_TOLERANCE;
+    for start in (0..s).step_by(CHUNK) {
+        let len = CHUNK.min(s - start);
+        let mut valid = true;
+        for t in 0..len {
+            let u = start + t;
+            let (dx, dy) = (bx[u] - ax[u], by[u] - ay[u]);
+            let len2 = dx * dx + dy * dy;
+            let (vx, vy) = (cx[u] - ax[u], cy[u] - ay[u]);
+            let a2 = ax[u] * ax[u] + ay[u] * ay[u];
+            let b2 = bx[u] * bx[u] + by[u] * by[u];
+            let c2 = cx[u] * cx[u] + cy[u] * cy[u];
+            valid &= len2 > tol2 * (1.0 + a2 + b2);
+            let inv = 1.0 / len2;
+            let x = -(dx * vy - dy * vx) * inv;
+            let y = (dx * vx + dy * vy) * inv;
+            px[0][t] = x;
+            py[0][t] = y;
+            if n_orders == 6 {
+                let n = x * x + y * y;
+                let mm = x * x + (y - 1.0) * (y - 1.0);
+                // |AC|² = n·|AB|², |BC|² = m·|AB|²: the same relative coincidence test.
+                valid &= (n * len2 > tol2 * (1.0 + a2 + c2)) & (mm * len2 > tol2 * (1.0 + b2 + c2));
+                let (inv_n, inv_m) = (1.0 / n, 1.0 / mm);
+                px[1][t] = -x;
+                py[1][t] = 1.0 - y;
+                px[2][t] = -x * inv_n;
+                py[2][t] = y * inv_n;
+                px[3][t] = x * inv_n;
+                py[3][t] = 1.0 - y * inv_n;
+                px[4][t] = x * inv_m;
+                py[4][t] = (1.0 - y) * inv_m;
+                px[5][t] = -x * inv_m;
+                py[5][t] = (n - y) * inv_m;
+            }
+        }
+        if !valid {
+            return Err(PqrmError::CoincidentLandmarks {
+                set: [samples.ids()[i].0, samples.ids()[j].0, samples.ids()[k].0],
+                reason: "two of the three landmarks coincide in a sample (zero noise on one spot?)"
+                    .into(),
+            });
+        }
+        for (o, c) in counts.iter_mut().enumerate() {
+            calculus.classify_normalised_into(&px[o][..len], &py[o][..len], &mut states[..len]);
+            let mut quads = states[..len].chunks_exact(4);
+            for quad in &mut quads {
+                for (lane, st) in quad.iter().enumerate() {
+                    c[usize::from(*st)][lane] += 1;
+                }
+            }
+            for st in quads.remainder() {
+                c[usize::from(*st)][0] += 1;
+            }
+        }
+    }
+    Ok(counts
+        .into_iter()
+        .map(|c| c.into_iter().map(|l| l.iter().sum()).collect())
+        .collect())
+}
+
+/// Sums counts of a finer calculus into a coarser one.
+#[must_use]
+pub fn merge_counts(merge: &MergeMap, counts: &[u32]) -> Vec<u32> {
+    let mut out = vec![0u32; merge.n_coarse()];
+    for (c, s) in counts.iter().zip(merge.as_slice()) {
+        out[s.index()] += c;
+    }
+    out
+}
+
+/// Log-probabilities `ln p(q)` from counts with `floor` pseudo-counts per state.
+///
+/// With `floor = 0` a state with no count gets `-inf`.
+#[must_use]
+pub fn log_likelihood(counts: &[u32], floor: f64) -> Vec<f64> {
+    let total: f64 =
+        counts.iter().map(|&c| f64::from(c)).sum::<f64>() + floor * counts.len() as f64;
+    counts
+        .iter()
+        .map(|&c| ((f64::from(c) + floor) / total).ln())
+        .collect()
+}

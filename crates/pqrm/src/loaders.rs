@@ -1,0 +1,360 @@
+//! Observation files: our CSV, the UTIAS MRCLAM directory format, and g2o/Victoria Park
+//! `LANDMARK` lines. Every loader returns time-ordered [`Scan`]s (one per robot and time
+//! stamp) and, where the format has it, the [`GroundTruth`].
+//!
+//! | format | file(s) | one scan is |
+//! |---|---|---|
+//! | `csv` | `t,robot,landmark,x,y,cxx,cxy,cyy` (robot frame, m, m²), header required | rows with equal `(t, robot)` |
+//! | `mrclam` | a directory with `Barcodes.dat`, `Landmark_Groundtruth.dat`, `Robot{1..5}_Measurement.dat` | measurements of one robot with one time stamp |
+//! | `g2o` | lines `LANDMARK pose lm x y cxx cxy cyy` (other tags ignored) | landmarks seen from one pose |
+//!
+//! MRCLAM measurements are range-bearing; the covariance comes from a [`RangeBearingNoise`]
+//! (the dataset gives none). Robot-to-robot sightings (barcodes of subjects 1–5) and unknown
+//! barcodes are skipped and counted.
+
+use std::collections::BTreeMap;
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+use crate::error::{PqrmError, Result};
+use crate::metrics::GroundTruth;
+use crate::observation::{LandmarkId, Observation, Scan};
+
+/// Scans plus whatever reference the format carries.
+#[derive(Debug, Clone, Default)]
+pub struct Dataset {
+    /// Scans sorted by time, then robot.
+    pub scans: Vec<Scan>,
+    /// Surveyed landmark positions, when the format has them.
+    pub truth: Option<GroundTruth>,
+    /// Lines or measurements skipped on purpose (e.g. robot-to-robot sightings).
+    pub skipped: usize,
+}
+
+/// Noise model for range-bearing sensors without per-measurement covariances.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RangeBearingNoise {
+    /// Range standard deviation (m).
+    pub sigma_range: f64,
+    /// Bearing standard deviation (rad).
+    pub sigma_bearing: f64,
+}
+
+impl RangeBearingNoise {
+    /// The default for MRCLAM: median absolute errors of ~0.1 m and ~0.006 rad (dataset
+    /// README) are the medians of Gaussians with σ = median/0.6745 ≈ 0.15 m and 0.009 rad;
+    /// we round the bearing up to 0.01 rad. How wrong this is, is measured by
+    /// [`crate::study::noise_check`] against the surveyed inter-landmark distances.
+    pub const MRCLAM: Self = Self {
+        sigma_range: 0.15,
+        sigma_bearing: 0.01,
+    };
+}
+
+fn read(path: &Path) -> Result<String> {
+    std::fs::read_to_string(path).map_err(|source| PqrmError::Io {
+        path: path.to_path_buf(),
+        source,
+    })
+}
+
+fn parse_err(path: &Path, line: usize, reason: impl Into<String>) -> PqrmError {
+    PqrmError::Parse {
+        path: path.to_path_buf(),
+        line,
+        reason: reason.into(),
+    }
+}
+
+fn numbers(path: &Path, lineno: usize, fields: &[&str]) -> Result<Vec<f64>> {
+    fields
+        .iter()
+        .map(|f| {
+            f.trim()
+                .parse::<f64>()
+                .map_err(|_| parse_err(path, lineno, format!("`{f}` is not a number")))
+        })
+        .collect()
+}
+
+/// Groups `(t, robot, observation)` rows into validated scans sorted by time then robot.
+fn group(rows: Vec<(f64, u32, Observation)>) -> Result<Vec<Scan>> {
+    let mut rows = rows;
+    rows.sort_by(|a, b| {
+        a.0.total_cmp(&b.0)
+            .then(a.1.cmp(&b.1))
+            .then(a.2.id.cmp(&b.2.id))
+    });
+    let mut scans = Vec::new();
+    let mut i = 0;
+    while i < rows.len() {
+        let (t, robot) = (rows[i].0, rows[i].1);
+        let mut j = i;
+        while j < rows.len() && rows[j].0 == t && rows[j].1 == robot {
+            j += 1;
+        }
+        scans.push(Scan::new(
+            t,
+            robot,
+            rows[i..j].iter().map(|r| r.2).collect(),
+        )?);
+        i = j;
+    }
+    Ok(scans)
+}
+
+/// Reads our observation CSV.
+///
+/// # Errors
+/// [`PqrmError::Io`]; [`PqrmError::Parse`] naming the line for a wrong header, a wrong field
+/// count or a bad number; observation errors (bad covariance, duplicate landmark in a scan)
+/// are reported with the line too.
+pub fn read_csv(path: &Path) -> Result<Dataset> {
+    let text = read(path)?;
+    let mut lines = text
+        .lines()
+        .enumerate()
+        .filter(|(_, l)| !l.trim().is_empty());
+    let header = lines
+        .next()
+        .map(|(_, l)| l.trim().to_owned())
+        .unwrap_or_default();
+    if header.replace(' ', "") != "t,robot,landmark,x,y,cxx,cxy,cyy" {
+        return Err(parse_err(
+            path,
+            1,
+            format!("expected the header `t,robot,landmark,x,y,cxx,cxy,cyy`, found `{header}`"),
+        ));
+    }
+    let mut rows = Vec::new();
+    for (i, line) in lines {
+        let lineno = i + 1;
+        let f: Vec<&str> = line.split(',').collect();
+        if f.len() != 8 {
+            return Err(parse_err(
+                path,
+                lineno,
+                format!("expected 8 fields, found {}", f.len()),
+            ));
+        }
+        let v = numbers(path, lineno, &f)?;
+        let (robot, id) = (v[1], v[2]);
+        if robot < 0.0
+            || robot.fract() != 0.0
+            || id < 0.0
+            || id.fract() != 0.0
+            || id > f64::from(u32::MAX)
+        {
+            return Err(parse_err(
+                path,
+                lineno,
+                "robot and landmark must be non-negative integers",
+            ));
+        }
+        let obs = Observation::new(
+            LandmarkId(id as u32),
+            [v[3], v[4]],
+            [[v[5], v[6]], [v[6], v[7]]],
+        )
+        .map_err(|e| parse_err(path, lineno, e.to_string()))?;
+        if !v[0].is_finite() {
+            return Err(parse_err(path, lineno, "time is not finite"));
+        }
+        rows.push((v[0], robot as u32, obs));
+    }
+    Ok(Dataset {
+        scans: group(rows)?,
+        truth: None,
+        skipped: 0,
+    })
+}
+
+/// Writes scans as our observation CSV (the format [`read_csv`] reads and the simulator
+/// writes).
+///
+/// # Errors
+/// I/O errors of the writer.
+pub fn write_csv(scans: &[Scan], out: &mut impl Write) -> std::io::Result<()> {
+    writeln!(out, "t,robot,landmark,x,y,cxx,cxy,cyy")?;
+    for s in scans {
+        for o in &s.observations {
+            writeln!(
+                out,
+                "{},{},{},{},{},{},{},{}",
+                s.t, s.robot, o.id.0, o.mean[0], o.mean[1], o.cov[0][0], o.cov[0][1], o.cov[1][1]
+            )?;
+        }
+    }
+    Ok(())
+}
+
+/// Reads a truth CSV `landmark,x,y` (header required).
+///
+/// # Errors
+/// [`PqrmError::Io`], [`PqrmError::Parse`].
+pub fn read_truth_csv(path: &Path) -> Result<GroundTruth> {
+    let text = read(path)?;
+    let mut truth = GroundTruth::default();
+    for (i, line) in text.lines().enumerate().skip(1) {
+        if line.trim().is_empty() {
+            continue;
+        }
+        let f: Vec<&str> = line.split(',').collect();
+        if f.len() != 3 {
+            return Err(parse_err(path, i + 1, "expected `landmark,x,y`"));
+        }
+        let v = numbers(path, i + 1, &f)?;
+        if v[0] < 0.0 || v[0].fract() != 0.0 || !v[1].is_finite() || !v[2].is_finite() {
+            return Err(parse_err(path, i + 1, "bad landmark id or position"));
+        }
+        truth
+            .positions
+            .insert(LandmarkId(v[0] as u32), [v[1], v[2]]);
+    }
+    Ok(truth)
+}
+
+/// Non-comment lines of a MRCLAM `.dat` file split on whitespace, with line numbers.
+fn dat_rows(path: &Path) -> Result<Vec<(usize, Vec<f64>)>> {
+    let text = read(path)?;
+    let mut out = Vec::new();
+    for (i, line) in text.lines().enumerate() {
+        let t = line.trim();
+        if t.is_empty() || t.starts_with('#') {
+            continue;
+        }
+        let f: Vec<&str> = t.split_whitespace().collect();
+        out.push((i + 1, numbers(path, i + 1, &f)?));
+    }
+    Ok(out)
+}
+
+/// Reads a MRCLAM dataset directory; the surveyed positions become the truth.
+///
+/// # Errors
+/// [`PqrmError::Io`] for a missing file, [`PqrmError::Parse`] for malformed lines,
+/// [`PqrmError::InvalidConfig`] for a negative noise.
+pub fn read_mrclam(dir: &Path, noise: RangeBearingNoise) -> Result<Dataset> {
+    let file = |name: &str| -> PathBuf { dir.join(name) };
+    let mut truth = GroundTruth::default();
+    for (line, v) in dat_rows(&file("Landmark_Groundtruth.dat"))? {
+        if v.len() < 3 {
+            return Err(parse_err(
+                &file("Landmark_Groundtruth.dat"),
+                line,
+                "expected `subject x y ...`",
+            ));
+        }
+        truth
+            .positions
+            .insert(LandmarkId(v[0] as u32), [v[1], v[2]]);
+    }
+    let mut barcode_to_subject = BTreeMap::new();
+    for (line, v) in dat_rows(&file("Barcodes.dat"))? {
+        if v.len() != 2 {
+            return Err(parse_err(
+                &file("Barcodes.dat"),
+                line,
+                "expected `subject barcode`",
+            ));
+        }
+        barcode_to_subject.insert(v[1] as u32, v[0] as u32);
+    }
+    let mut rows = Vec::new();
+    let mut skipped = 0;
+    let mut found_any = false;
+    for robot in 1..=5u32 {
+        let path = file(&format!("Robot{robot}_Measurement.dat"));
+        if !path.exists() {
+            continue;
+        }
+        found_any = true;
+        for (line, v) in dat_rows(&path)? {
+            if v.len() != 4 {
+                return Err(parse_err(
+                    &path,
+                    line,
+                    "expected `time barcode range bearing`",
+                ));
+            }
+            let subject = barcode_to_subject.get(&(v[1] as u32)).copied();
+            match subject {
+                Some(s) if truth.positions.contains_key(&LandmarkId(s)) => {
+                    let obs = Observation::from_range_bearing(
+                        LandmarkId(s),
+                        v[2],
+                        v[3],
+                        noise.sigma_range,
+                        noise.sigma_bearing,
+                    )
+                    .map_err(|e| parse_err(&path, line, e.to_string()))?;
+                    rows.push((v[0], robot, obs));
+                }
+                _ => skipped += 1,
+            }
+        }
+    }
+    if !found_any {
+        return Err(PqrmError::Io {
+            path: file("Robot1_Measurement.dat"),
+            source: std::io::Error::new(
+                std::io::ErrorKind::NotFound,
+                "no RobotN_Measurement.dat in the directory",
+            ),
+        });
+    }
+    // A robot occasionally reports the same landmark twice in one frame: keep the first.
+    rows.sort_by(|a, b| {
+        a.0.total_cmp(&b.0)
+            .then(a.1.cmp(&b.1))
+            .then(a.2.id.cmp(&b.2.id))
+    });
+    let before = rows.len();
+    rows.dedup_by(|b, a| a.0 == b.0 && a.1 == b.1 && a.2.id == b.2.id);
+    skipped += before - rows.len();
+    Ok(Dataset {
+        scans: group(rows)?,
+        truth: Some(truth),
+        skipped,
+    })
+}
+
+/// Reads g2o / Victoria Park `LANDMARK pose lm x y cxx cxy cyy` lines; each pose is a scan
+/// at time `pose`.
+///
+/// # Errors
+/// [`PqrmError::Io`], [`PqrmError::Parse`].
+pub fn read_g2o(path: &Path) -> Result<Dataset> {
+    let text = read(path)?;
+    let mut rows = Vec::new();
+    let mut skipped = 0;
+    for (i, line) in text.lines().enumerate() {
+        let f: Vec<&str> = line.split_whitespace().collect();
+        match f.first() {
+            Some(&"LANDMARK") => {
+                if f.len() != 8 {
+                    return Err(parse_err(
+                        path,
+                        i + 1,
+                        format!("LANDMARK needs 7 values, found {}", f.len() - 1),
+                    ));
+                }
+                let v = numbers(path, i + 1, &f[1..])?;
+                let obs = Observation::new(
+                    LandmarkId(v[1] as u32),
+                    [v[2], v[3]],
+                    [[v[4], v[5]], [v[5], v[6]]],
+                )
+                .map_err(|e| parse_err(path, i + 1, e.to_string()))?;
+                rows.push((v[0], 0, obs));
+            }
+            None => {}
+            Some(_) => skipped += 1,
+        }
+    }
+    Ok(Dataset {
+        scans: group(rows)?,
+        truth: None,
+        skipped,
+    })
+}

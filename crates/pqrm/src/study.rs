@@ -1,0 +1,668 @@
+//! The thesis's studies as library code (the CLI only formats and plots them):
+//! - [`run_monte_carlo`]: the Monte Carlo study of §2.3.1 (set-up in DESIGN §4);
+//! - [`run_real`]: mapping a recorded dataset, PQRM beside a per-frame (no filter)
+//!   baseline, the analogue of §2.3.2 (Figs 2.14–2.16);
+//! - [`noise_check`]: how wrong a range-bearing noise model is, measured against surveyed
+//!   inter-landmark distances.
+//!
+//! Both studies sample the finest calculus (the first one given) once per step and merge its
+//! counts into the coarser ones, as the thesis evaluates all six on the same data.
+
+use std::collections::BTreeMap;
+
+use qsr_core::{Calculus, MergeMap};
+use rand::{RngExt, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use rand_distr::{Distribution, Normal};
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+
+use crate::error::{PqrmError, Result};
+use crate::likelihood::{LandmarkSet, Orderings, log_likelihood, merge_counts, step_counts};
+use crate::loaders::Dataset;
+use crate::map::{Pqrm, PqrmConfig, TripletBelief, normalise};
+use crate::metrics::{Baselines, GroundTruth, MapMetrics, evaluate, random_baselines};
+use crate::observation::{LandmarkId, Observation, Scan};
+use crate::sampler::{ScanSamples, mix};
+
+/// The finest calculus and its merges into the others.
+struct CalculusFamily {
+    calculi: Vec<Calculus>,
+    merges: Vec<Option<MergeMap>>,
+}
+
+impl CalculusFamily {
+    fn new(names: &[String]) -> Result<Self> {
+        if names.is_empty() {
+            return Err(PqrmError::InvalidConfig("no calculus given".into()));
+        }
+        let calculi = names
+            .iter()
+            .map(|n| Calculus::resolve(n))
+            .collect::<std::result::Result<Vec<_>, _>>()?;
+        let merges = calculi
+            .iter()
+            .enumerate()
+            .map(|(i, c)| {
+                if i == 0 {
+                    Ok(None)
+                } else {
+                    calculi[0].merge_map(c).map(Some)
+                }
+            })
+            .collect::<std::result::Result<Vec<_>, _>>()?;
+        Ok(Self { calculi, merges })
+    }
+
+    fn counts_for(
+        &self,
+        i: usize,
+        fine: &[(LandmarkSet, Vec<u32>)],
+    ) -> Vec<(LandmarkSet, Vec<u32>)> {
+        match &self.merges[i] {
+            None => fine.to_vec(),
+            Some(m) => fine.iter().map(|(s, c)| (*s, merge_counts(m, c))).collect(),
+        }
+    }
+}
+
+/// Settings of the Monte Carlo study (defaults: DESIGN §4 at full scale).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct MonteCarloConfig {
+    /// Sensor noise standard deviations σ_R (m).
+    pub sigmas: Vec<f64>,
+    /// Trials per noise level.
+    pub trials: usize,
+    /// Samples per landmark per step.
+    pub samples: usize,
+    /// Landmarks per world (the thesis does not say; DESIGN §4 picks 10).
+    pub landmarks: usize,
+    /// Side of the square world (m).
+    pub world: f64,
+    /// Radius of the robot's circular loop about the centre (m).
+    pub radius: f64,
+    /// Angle between measurements along the loop (degrees).
+    pub step_deg: f64,
+    /// Sensor range (m).
+    pub range: f64,
+    /// Calculi, finest first; every other one must be a merge of the first.
+    pub calculi: Vec<String>,
+    /// Pseudo-count floor of the mapper.
+    pub floor: f64,
+    /// σ_R values at which confusion matrices and wrongly mapped triplets are recorded
+    /// (thesis Figs 2.8, 2.9: 1 m and 50 m).
+    pub detail_sigmas: Vec<f64>,
+    /// Seed.
+    pub seed: u64,
+}
+
+impl Default for MonteCarloConfig {
+    fn default() -> Self {
+        Self {
+            sigmas: (0..=20).map(|i| f64::from(i) * 5.0).collect(),
+            trials: 1000,
+            samples: 1000,
+            landmarks: 10,
+            world: 100.0,
+            radius: 50.0,
+            step_deg: 16.0,
+            range: 60.0,
+            calculi: qsr_core::POINT_CALCULI
+                .iter()
+                .map(|s| (*s).to_owned())
+                .collect(),
+            floor: 1.0,
+            detail_sigmas: vec![1.0, 50.0],
+            seed: 0,
+        }
+    }
+}
+
+impl MonteCarloConfig {
+    /// The quick version used by tests and `--quick`: 5 noise levels, 12 trials, 200 samples.
+    #[must_use]
+    pub fn quick() -> Self {
+        Self {
+            sigmas: vec![0.0, 1.0, 10.0, 50.0, 100.0],
+            trials: 12,
+            samples: 200,
+            ..Self::default()
+        }
+    }
+
+    /// σ_E, the standard deviation of the uniform landmark distribution (world/√12).
+    #[must_use]
+    pub fn sigma_e(&self) -> f64 {
+        self.world / 12f64.sqrt()
+    }
+
+    fn validate(&self) -> Result<()> {
+        let bad = |m: String| Err(PqrmError::InvalidConfig(m));
+        if self.sigmas.is_empty() || self.sigmas.iter().any(|s| !(s.is_finite() && *s >= 0.0)) {
+            return bad(format!(
+                "noise levels must be finite and >= 0: {:?}",
+                self.sigmas
+            ));
+        }
+        if self.trials == 0 || self.samples == 0 {
+            return bad("trials and samples must be >= 1".into());
+        }
+        if self.landmarks < 3 {
+            return bad(format!("need at least 3 landmarks, got {}", self.landmarks));
+        }
+        let pos = [self.world, self.radius, self.step_deg, self.range];
+        if pos.iter().any(|v| !(v.is_finite() && *v > 0.0)) {
+            return bad("world, radius, step and range must be finite and > 0".into());
+        }
+        Ok(())
+    }
+}
+
+/// Mean and standard deviation over trials.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
+pub struct Stat {
+    /// Mean.
+    pub mean: f64,
+    /// Standard deviation (population).
+    pub std: f64,
+}
+
+impl Stat {
+    fn of(values: &[f64]) -> Self {
+        if values.is_empty() {
+            return Self::default();
+        }
+        let n = values.len() as f64;
+        let mean = values.iter().sum::<f64>() / n;
+        let var = values.iter().map(|v| (v - mean) * (v - mean)).sum::<f64>() / n;
+        Self {
+            mean,
+            std: var.sqrt(),
+        }
+    }
+}
+
+/// One (calculus, noise level) row of the study.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct LevelResult {
+    /// Calculus name.
+    pub calculus: String,
+    /// σ_R (m).
+    pub sigma_r: f64,
+    /// σ_N = σ_R / σ_E.
+    pub sigma_n: f64,
+    /// Trials that produced a map.
+    pub trials: usize,
+    /// Landmark sets per map.
+    pub n_sets: Stat,
+    /// Mean map entropy (eq. 2.11).
+    pub mean_entropy: Stat,
+    /// Mean map entropy / ln Q.
+    pub normalized_entropy: Stat,
+    /// Error rate of the ML state.
+    pub error_rate: Stat,
+    /// Mean probability of the ML state.
+    pub p_ml: Stat,
+    /// Mean neighbour distance of the ML state to the truth.
+    pub neighbor_distance: Stat,
+}
+
+/// A wrongly mapped triplet (thesis Fig 2.8).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct WrongTriplet {
+    /// σ_R of the trial.
+    pub sigma_r: f64,
+    /// Normalised position of the third landmark.
+    pub x: f64,
+    /// Normalised position of the third landmark.
+    pub y: f64,
+    /// `|AB|` (m).
+    pub d_ab: f64,
+    /// True state label.
+    pub truth: String,
+    /// ML state label.
+    pub ml: String,
+}
+
+/// Everything the Monte Carlo study measured.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct MonteCarloResult {
+    /// The settings.
+    pub config: MonteCarloConfig,
+    /// One row per calculus and noise level.
+    pub levels: Vec<LevelResult>,
+    /// Random-guess baselines per calculus.
+    pub baselines: BTreeMap<String, Baselines>,
+    /// Confusion matrices `[true][ml]` of the finest calculus at each detail σ_R.
+    pub confusion: Vec<(f64, Vec<Vec<u64>>)>,
+    /// Wrongly mapped triplets of the finest calculus at the detail σ_R values.
+    pub wrong: Vec<WrongTriplet>,
+}
+
+struct TrialOutcome {
+    metrics: Vec<MapMetrics>,
+    wrong: Vec<WrongTriplet>,
+}
+
+/// Landmarks and the observations of one trial (a world and the robot's loop).
+fn simulate_trial(
+    config: &MonteCarloConfig,
+    sigma: f64,
+    level: usize,
+    trial: usize,
+) -> (GroundTruth, Vec<Scan>) {
+    let key = mix(config.seed ^ mix(level as u64) ^ mix(mix(trial as u64)));
+    let mut rng = ChaCha8Rng::seed_from_u64(key);
+    let mut truth = GroundTruth::default();
+    for i in 0..config.landmarks {
+        let p = [
+            rng.random_range(0.0..config.world),
+            rng.random_range(0.0..config.world),
+        ];
+        truth.positions.insert(LandmarkId(i as u32), p);
+    }
+    let centre = config.world / 2.0;
+    let steps = (360.0 / config.step_deg).ceil() as usize;
+    let noise = Normal::new(0.0, sigma.max(0.0))
+        .unwrap_or_else(|_| Normal::new(0.0, 0.0).expect("zero noise"));
+    let mut scans = Vec::with_capacity(steps);
+    for k in 0..steps {
+        let th = (k as f64 * config.step_deg).to_radians();
+        let (px, py) = (
+            centre + config.radius * th.cos(),
+            centre + config.radius * th.sin(),
+        );
+        let heading = th + std::f64::consts::FRAC_PI_2;
+        let (s, c) = heading.sin_cos();
+        let mut obs = Vec::new();
+        for (id, p) in &truth.positions {
+            let (dx, dy) = (p[0] - px, p[1] - py);
+            if dx.hypot(dy) > config.range {
+                continue;
+            }
+            // Robot frame, then the sensor's noise; the mapper gets the noisy mean and σ² I.
+            let (rx, ry) = (c * dx + s * dy, -s * dx + c * dy);
+            let z = [rx + noise.sample(&mut rng), ry + noise.sample(&mut rng)];
+            if let Ok(o) = Observation::isotropic(*id, z, sigma) {
+                obs.push(o);
+            }
+        }
+        if let Ok(scan) = Scan::new(k as f64, 0, obs) {
+            scans.push(scan);
+        }
+    }
+    (truth, scans)
+}
+
+fn run_trial(
+    config: &MonteCarloConfig,
+    family: &CalculusFamily,
+    sigma: f64,
+    level: usize,
+    trial: usize,
+) -> Result<Option<TrialOutcome>> {
+    let (truth, scans) = simulate_trial(config, sigma, level, trial);
+    let map_config = PqrmConfig {
+        samples: config.samples,
+        floor: config.floor,
+        orderings: Orderings::All,
+        seed: mix(config.seed ^ 0x5a5a ^ mix(level as u64 ^ mix(trial as u64))),
+    };
+    let mut maps = family
+        .calculi
+        .iter()
+        .map(|c| Pqrm::new(c.clone(), map_config))
+        .collect::<Result<Vec<_>>>()?;
+    for (step, scan) in scans.iter().enumerate() {
+        if scan.observations.len() < 3 {
+            for m in &mut maps {
+                m.apply_counts(&[])?;
+            }
+            continue;
+        }
+        let samples = ScanSamples::draw(scan, config.samples, map_config.seed, step as u64);
+        let fine = step_counts(&family.calculi[0], &samples, Orderings::All)?;
+        for (i, m) in maps.iter_mut().enumerate() {
+            m.apply_counts(&family.counts_for(i, &fine))?;
+        }
+    }
+    if maps[0].is_empty() {
+        return Ok(None);
+    }
+    let metrics = maps
+        .iter()
+        .map(|m| evaluate(m, &truth))
+        .collect::<Result<Vec<_>>>()?;
+    let mut wrong = Vec::new();
+    if config.detail_sigmas.contains(&sigma) {
+        let fine = &maps[0];
+        for (set, b) in fine.iter() {
+            let Some(t) = truth.state(fine.calculus(), set)? else {
+                continue;
+            };
+            let ml = b.ml_state();
+            if ml != t
+                && let Some(([x, y], d_ab)) = truth.normalised(set)
+            {
+                wrong.push(WrongTriplet {
+                    sigma_r: sigma,
+                    x,
+                    y,
+                    d_ab,
+                    truth: fine.calculus().label(t).to_owned(),
+                    ml: fine.calculus().label(ml).to_owned(),
+                });
+            }
+        }
+    }
+    Ok(Some(TrialOutcome { metrics, wrong }))
+}
+
+/// Runs the Monte Carlo study. `progress` is called once per finished trial (from worker
+/// threads). Trials run in parallel; the result is identical for any thread count.
+///
+/// # Errors
+/// [`PqrmError::InvalidConfig`]; calculus errors (unknown name, a calculus that is not a
+/// merge of the first).
+pub fn run_monte_carlo(
+    config: &MonteCarloConfig,
+    progress: &(dyn Fn() + Sync),
+) -> Result<MonteCarloResult> {
+    config.validate()?;
+    let family = CalculusFamily::new(&config.calculi)?;
+    let jobs: Vec<(usize, usize)> = (0..config.sigmas.len())
+        .flat_map(|l| (0..config.trials).map(move |t| (l, t)))
+        .collect();
+    let outcomes: Vec<Result<Option<TrialOutcome>>> = jobs
+        .par_iter()
+        .map(|&(l, t)| {
+            let r = run_trial(config, &family, config.sigmas[l], l, t);
+            progress();
+            r
+        })
+        .collect();
+    let q0 = family.calculi[0].n_states();
+    let mut per_level: Vec<Vec<TrialOutcome>> =
+        (0..config.sigmas.len()).map(|_| Vec::new()).collect();
+    for (&(l, _), o) in jobs.iter().zip(outcomes) {
+        if let Some(o) = o? {
+            per_level[l].push(o);
+        }
+    }
+    let mut levels = Vec::new();
+    let mut confusion = Vec::new();
+    let mut wrong = Vec::new();
+    let sigma_e = config.sigma_e();
+    for (l, outcomes) in per_level.iter().enumerate() {
+        let sigma = config.sigmas[l];
+        for (ci, calc) in family.calculi.iter().enumerate() {
+            let col = |f: &dyn Fn(&MapMetrics) -> f64| {
+                Stat::of(
+                    &outcomes
+                        .iter()
+                        .map(|o| f(&o.metrics[ci]))
+                        .collect::<Vec<_>>(),
+                )
+            };
+            levels.push(LevelResult {
+                calculus: calc.name().to_owned(),
+                sigma_r: sigma,
+                sigma_n: sigma / sigma_e,
+                trials: outcomes.len(),
+                n_sets: col(&|m| m.n_sets as f64),
+                mean_entropy: col(&|m| m.mean_entropy),
+                normalized_entropy: col(&|m| m.normalized_entropy),
+                error_rate: col(&|m| m.error_rate),
+                p_ml: col(&|m| m.p_ml_mean),
+                neighbor_distance: col(&|m| m.mean_neighbor_distance),
+            });
+        }
+        if config.detail_sigmas.contains(&sigma) {
+            let mut total = vec![vec![0u64; q0]; q0];
+            for o in outcomes {
+                for (row, add) in total.iter_mut().zip(&o.metrics[0].confusion) {
+                    for (a, b) in row.iter_mut().zip(add) {
+                        *a += b;
+                    }
+                }
+                wrong.extend(o.wrong.iter().cloned());
+            }
+            confusion.push((sigma, total));
+        }
+    }
+    let baselines = family
+        .calculi
+        .iter()
+        .map(|c| (c.name().to_owned(), random_baselines(c)))
+        .collect();
+    Ok(MonteCarloResult {
+        config: config.clone(),
+        levels,
+        baselines,
+        confusion,
+        wrong,
+    })
+}
+
+/// Per-frame (no filter) scores: each observation of a set judged on its own.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+pub struct FrameMetrics {
+    /// (set, frame) observations scored.
+    pub n: usize,
+    /// Fraction with a wrong ML state.
+    pub error_rate: f64,
+    /// Mean neighbour distance of the ML state.
+    pub mean_neighbor_distance: f64,
+    /// Mean entropy of the single-frame distribution.
+    pub mean_entropy: f64,
+    /// Top-n error rates.
+    pub top_n_error: Vec<f64>,
+}
+
+/// One calculus on a recorded dataset.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct RealCalculusResult {
+    /// Calculus name.
+    pub calculus: String,
+    /// The PQRM's scores.
+    pub pqrm: MapMetrics,
+    /// Entropy of every recorded set (Fig 2.14 histogram data).
+    pub entropies: Vec<f64>,
+    /// The per-frame baseline's scores.
+    pub per_frame: FrameMetrics,
+    /// Random-guess baselines.
+    pub random: Baselines,
+}
+
+/// Maps a recorded dataset with every calculus and scores PQRM and the per-frame baseline.
+///
+/// # Errors
+/// [`PqrmError::Mismatch`] without ground truth; mapper errors.
+pub fn run_real(
+    dataset: &Dataset,
+    calculi: &[String],
+    config: PqrmConfig,
+    progress: &(dyn Fn() + Sync),
+) -> Result<Vec<RealCalculusResult>> {
+    let truth = dataset
+        .truth
+        .as_ref()
+        .ok_or_else(|| PqrmError::Mismatch("the real-data study needs ground truth".into()))?;
+    let family = CalculusFamily::new(calculi)?;
+    let mut maps = family
+        .calculi
+        .iter()
+        .map(|c| Pqrm::new(c.clone(), config))
+        .collect::<Result<Vec<_>>>()?;
+    let n = family.calculi.len();
+    let mut frame_acc: Vec<(usize, usize, u64, f64, Vec<usize>)> = family
+        .calculi
+        .iter()
+        .map(|c| (0, 0, 0, 0.0, vec![0; c.n_states()]))
+        .collect();
+    for (step, scan) in dataset.scans.iter().enumerate() {
+        progress();
+        if scan.observations.len() < 3 {
+            continue;
+        }
+        let samples = ScanSamples::draw(scan, config.samples, config.seed, step as u64);
+        let fine = step_counts(&family.calculi[0], &samples, config.orderings)?;
+        for i in 0..n {
+            let counts = family.counts_for(i, &fine);
+            let calc = &family.calculi[i];
+            let acc = &mut frame_acc[i];
+            for (set, c) in &counts {
+                let Some(t) = truth.state(calc, set)? else {
+                    continue;
+                };
+                let b = TripletBelief {
+                    log_p: normalise(log_likelihood(c, config.floor)),
+                    updates: 1,
+                };
+                let ml = b.ml_state();
+                acc.0 += 1;
+                acc.1 += usize::from(ml != t);
+                acc.2 += u64::from(calc.neighbours().distance(ml, t).unwrap_or(0));
+                acc.3 += b.entropy();
+                let rank = b.ranked().iter().position(|s| *s == t).unwrap_or(0);
+                acc.4[rank] += 1;
+            }
+            maps[i].apply_counts(&counts)?;
+        }
+    }
+    let mut out = Vec::new();
+    for (i, map) in maps.iter().enumerate() {
+        let (cnt, wrong, dist, ent, ranks) = &frame_acc[i];
+        let nf = (*cnt).max(1) as f64;
+        let mut covered = 0;
+        let top_n_error = ranks
+            .iter()
+            .map(|r| {
+                covered += r;
+                1.0 - covered as f64 / nf
+            })
+            .collect();
+        out.push(RealCalculusResult {
+            calculus: map.calculus().name().to_owned(),
+            pqrm: evaluate(map, truth)?,
+            entropies: map.iter().map(|(_, b)| b.entropy()).collect(),
+            per_frame: FrameMetrics {
+                n: *cnt,
+                error_rate: *wrong as f64 / nf,
+                mean_neighbor_distance: *dist as f64 / nf,
+                mean_entropy: ent / nf,
+                top_n_error,
+            },
+            random: random_baselines(map.calculus()),
+        });
+    }
+    Ok(out)
+}
+
+/// How well a dataset's covariances describe its errors, from the pairs of landmarks seen in
+/// one frame: the measured distance between the two against the surveyed one, in units of
+/// the standard deviation the covariances predict.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+pub struct NoiseCheck {
+    /// Pairs compared.
+    pub pairs: usize,
+    /// Standard deviation of the normalised residuals (1 if the model is right).
+    pub z_std: f64,
+    /// Median |z| (0.674 for a correct Gaussian model).
+    pub z_median_abs: f64,
+    /// Fraction with |z| > 3 (0.0027 for a correct Gaussian model).
+    pub outlier_fraction: f64,
+    /// Median absolute distance error (m).
+    pub median_abs_error: f64,
+}
+
+/// Compares observed pair distances with the truth (see [`NoiseCheck`]).
+///
+/// # Errors
+/// [`PqrmError::Mismatch`] without ground truth or without any pair.
+pub fn noise_check(dataset: &Dataset) -> Result<NoiseCheck> {
+    let truth = dataset
+        .truth
+        .as_ref()
+        .ok_or_else(|| PqrmError::Mismatch("the noise check needs ground truth".into()))?;
+    let mut z = Vec::new();
+    let mut abs_err = Vec::new();
+    for scan in &dataset.scans {
+        for (i, a) in scan.observations.iter().enumerate() {
+            for b in &scan.observations[i + 1..] {
+                let (Some(ta), Some(tb)) = (truth.positions.get(&a.id), truth.positions.get(&b.id))
+                else {
+                    continue;
+                };
+                let d = [a.mean[0] - b.mean[0], a.mean[1] - b.mean[1]];
+                let dm = d[0].hypot(d[1]);
+                if dm == 0.0 {
+                    continue;
+                }
+                let u = [d[0] / dm, d[1] / dm];
+                let var: f64 = (0..2)
+                    .flat_map(|r| (0..2).map(move |c| (r, c)))
+                    .map(|(r, c)| u[r] * u[c] * (a.cov[r][c] + b.cov[r][c]))
+                    .sum();
+                let dt = (ta[0] - tb[0]).hypot(ta[1] - tb[1]);
+                abs_err.push((dm - dt).abs());
+                if var > 0.0 {
+                    z.push((dm - dt) / var.sqrt());
+                }
+            }
+        }
+    }
+    if z.is_empty() {
+        return Err(PqrmError::Mismatch(
+            "no landmark pair seen in one frame".into(),
+        ));
+    }
+    let n = z.len() as f64;
+    let mean = z.iter().sum::<f64>() / n;
+    let std = (z.iter().map(|v| (v - mean) * (v - mean)).sum::<f64>() / n).sqrt();
+    let median = |mut v: Vec<f64>| {
+        v.sort_by(f64::total_cmp);
+        v[v.len() / 2]
+    };
+    Ok(NoiseCheck {
+        pairs: z.len(),
+        z_std: std,
+        z_median_abs: median(z.iter().map(|v| v.abs()).collect()),
+        outlier_fraction: z.iter().filter(|v| v.abs() > 3.0).count() as f64 / n,
+        median_abs_error: median(abs_err),
+    })
+}
+
+/// `p(R | Z)` of a single observation of three points given in one frame (world or robot),
+/// each with its own covariance: the quantity of eq. 2.9 without the filter. `floor = 0`
+/// gives plain sample frequencies.
+///
+/// # Errors
+/// Observation errors for bad means/covariances, [`PqrmError::CoincidentLandmarks`].
+pub fn single_observation(
+    calculus: &Calculus,
+    points: [[f64; 2]; 3],
+    covs: [[[f64; 2]; 2]; 3],
+    samples: usize,
+    floor: f64,
+    seed: u64,
+) -> Result<Vec<f64>> {
+    if samples == 0 {
+        return Err(PqrmError::InvalidConfig("samples must be >= 1".into()));
+    }
+    if !(floor.is_finite() && floor >= 0.0) {
+        return Err(PqrmError::InvalidConfig(format!(
+            "floor must be finite and >= 0, got {floor}"
+        )));
+    }
+    let obs = (0..3)
+        .map(|i| Observation::new(LandmarkId(i as u32), points[i], covs[i]))
+        .collect::<Result<Vec<_>>>()?;
+    let scan = Scan::new(0.0, 0, obs)?;
+    let s = ScanSamples::draw(&scan, samples, seed, 0);
+    let counts = crate::likelihood::set_counts(calculus, &s, [0, 1, 2], &mut Vec::new())?;
+    Ok(log_likelihood(&counts, floor)
+        .into_iter()
+        .map(f64::exp)
+        .collect())
+}

@@ -1,0 +1,428 @@
+//! The estimator `p(R | Z)` (eq. 2.9) against things derived independently of the sampler,
+//! and the Bayes filter's algebra.
+#![allow(clippy::unwrap_used)] // tests: a panic is the failure report
+
+use pqrm::likelihood::{LandmarkSet, Orderings, log_likelihood, merge_counts, step_counts};
+use pqrm::study::single_observation;
+use pqrm::{LandmarkId, Observation, Pqrm, PqrmConfig, PqrmError, Scan, ScanSamples};
+use qsr_core::{Calculus, Point2};
+
+const Z: [[f64; 2]; 2] = [[0.0, 0.0], [0.0, 0.0]];
+
+fn iso(s: f64) -> [[f64; 2]; 2] {
+    [[s * s, 0.0], [0.0, s * s]]
+}
+
+/// Standard normal CDF (Abramowitz–Stegun 7.1.26 through erf, |error| < 1.5e-7).
+fn phi(x: f64) -> f64 {
+    let z = x / std::f64::consts::SQRT_2;
+    let t = 1.0 / (1.0 + 0.327_591_1 * z.abs());
+    let y = 1.0
+        - (((((1.061_405_429 * t - 1.453_152_027) * t) + 1.421_413_741) * t - 0.284_496_736) * t
+            + 0.254_829_592)
+            * t
+            * (-z * z).exp();
+    0.5 * (1.0 + if z >= 0.0 { y } else { -y })
+}
+
+#[test]
+fn left_right_with_noise_on_c_only_is_phi_of_distance_over_sigma() {
+    let lr = Calculus::builtin("left-right").unwrap();
+    let s = 40_000;
+    for (d, sigma) in [(0.5, 1.0), (1.0, 1.0), (-0.3, 0.5), (2.0, 1.5), (0.0, 1.0)] {
+        // A = (0,0), B = (0,10): C = (−d, 5) is d to the left of A→B.
+        let p = single_observation(
+            &lr,
+            [[0.0, 0.0], [0.0, 10.0], [-d, 5.0]],
+            [Z, Z, iso(sigma)],
+            s,
+            0.0,
+            11,
+        )
+        .unwrap();
+        let want = phi(d / sigma);
+        let se = (want * (1.0 - want) / s as f64).sqrt().max(1e-4);
+        assert!(
+            (p[0] - want).abs() < 4.0 * se,
+            "d={d} σ={sigma}: p(left)={} want {want}",
+            p[0]
+        );
+    }
+}
+
+#[test]
+fn tiny_noise_concentrates_on_the_true_state() {
+    let edc = Calculus::builtin("edc").unwrap();
+    for (c, label) in [
+        ([-0.3, 0.25], "13"),
+        ([0.9, 0.75], "9"),
+        ([2.0, -3.0], "20"),
+    ] {
+        let p = single_observation(
+            &edc,
+            [[0.0, 0.0], [0.0, 1.0], c],
+            [iso(1e-7); 3],
+            500,
+            0.0,
+            3,
+        )
+        .unwrap();
+        let s = edc.state(label).unwrap().index();
+        assert_eq!(p[s], 1.0, "{label}: {p:?}");
+    }
+}
+
+/// The huge-noise limit, derived without the sampler. With A, B, C i.i.d. N(m_i, σ²I) and
+/// σ → ∞ the means do not matter; u = B − A ~ N(0, 2σ²I) is independent of C − M (M the
+/// midpoint) ~ N(0, 1.5σ²I), and C's normalised position is (x, y − ½) = (−w₂, w₁)/|u| with
+/// w ~ N(0, 1.5σ²I): √(3/4)·Z/R with Z, R = |Z'| independent, i.e. √(3/8)·T with T a standard
+/// bivariate t with 2 degrees of freedom. In coordinates (v, θ) with r² = 2s²·v/(1 − v)
+/// (s² = 3/8) its measure is uniform, dv·dθ/2π, so a midpoint grid integrates it exactly up to
+/// the grid's resolution.
+fn huge_noise_limit(calc: &Calculus, n: usize) -> Vec<f64> {
+    let s2 = 3.0 / 8.0;
+    let mut p = vec![0.0; calc.n_states()];
+    for i in 0..n {
+        let v = (i as f64 + 0.5) / n as f64;
+        let r = (2.0 * s2 * v / (1.0 - v)).sqrt();
+        for j in 0..n {
+            let th = std::f64::consts::TAU * (j as f64 + 0.5) / n as f64;
+            let q = Point2::new(r * th.cos(), 0.5 + r * th.sin());
+            p[calc.classify_normalised(&q).index()] += 1.0;
+        }
+    }
+    p.iter().map(|c| c / (n * n) as f64).collect()
+}
+
+#[test]
+fn huge_noise_tends_to_the_derived_bivariate_t_limit() {
+    // Closed form for the double cross: P(y ≥ 1) = P(T ≥ (1/2)/s) = 1/4 for the t₂ marginal
+    // F(t) = 1/2 + t / (2√(2 + t²)), so front/middle/back = 1/4, 1/2, 1/4, halved by side.
+    let dc = Calculus::builtin("double-cross").unwrap();
+    let grid = huge_noise_limit(&dc, 600);
+    for (label, want) in [
+        ("left-front", 0.125),
+        ("right-front", 0.125),
+        ("left-middle", 0.25),
+        ("right-middle", 0.25),
+    ] {
+        assert!(
+            (grid[dc.state(label).unwrap().index()] - want).abs() < 2e-3,
+            "{label}: grid {grid:?}"
+        );
+    }
+    // The sampler with σ = 10^6 on all three (means far apart, irrelevant at that noise).
+    let samples = 200_000;
+    for name in ["double-cross", "edc"] {
+        let calc = Calculus::builtin(name).unwrap();
+        let want = huge_noise_limit(&calc, 1500);
+        let got = single_observation(
+            &calc,
+            [[3.0, -2.0], [40.0, 7.0], [-5.0, 12.0]],
+            [iso(1e6); 3],
+            samples,
+            0.0,
+            5,
+        )
+        .unwrap();
+        for (q, (g, w)) in got.iter().zip(&want).enumerate() {
+            let se = (w * (1.0 - w) / samples as f64).sqrt();
+            assert!(
+                (g - w).abs() < 5.0 * se + 1e-3,
+                "{name} state {}: sampled {g}, derived {w}",
+                calc.labels()[q]
+            );
+        }
+    }
+}
+
+fn scan(points: &[(u32, [f64; 2])], sigma: f64) -> Scan {
+    Scan::new(
+        0.0,
+        0,
+        points
+            .iter()
+            .map(|(i, p)| Observation::isotropic(LandmarkId(*i), *p, sigma).unwrap())
+            .collect(),
+    )
+    .unwrap()
+}
+
+#[test]
+fn the_filter_is_commutative_in_the_order_of_observations() {
+    let edc = Calculus::builtin("edc").unwrap();
+    let steps: Vec<Vec<(LandmarkSet, Vec<u32>)>> = (0..6)
+        .map(|k| {
+            let sc = scan(
+                &[
+                    (1, [0.0, 0.0]),
+                    (2, [0.0, 1.0]),
+                    (3, [0.2 + 0.05 * f64::from(k), 0.45]),
+                ],
+                0.3,
+            );
+            step_counts(
+                &edc,
+                &ScanSamples::draw(&sc, 300, 9, k as u64),
+                Orderings::All,
+            )
+            .unwrap()
+        })
+        .collect();
+    let build = |order: &[usize]| {
+        let mut m = Pqrm::new(edc.clone(), PqrmConfig::default()).unwrap();
+        for &k in order {
+            m.apply_counts(&steps[k]).unwrap();
+        }
+        m
+    };
+    let (a, b) = (build(&[0, 1, 2, 3, 4, 5]), build(&[5, 3, 1, 0, 4, 2]));
+    for (set, belief) in a.iter() {
+        let other = b.record(set).unwrap();
+        for (x, y) in belief.log_p.iter().zip(&other.log_p) {
+            assert!((x - y).abs() < 1e-9, "{set:?}");
+        }
+    }
+}
+
+#[test]
+fn ten_million_updates_stay_finite_and_normalised() {
+    let q = Calculus::builtin("quadrant").unwrap();
+    let mut m = Pqrm::new(
+        q,
+        PqrmConfig {
+            floor: 0.5,
+            ..PqrmConfig::default()
+        },
+    )
+    .unwrap();
+    let set = LandmarkSet::new(1, 2, 3);
+    // Evidence mildly against the true state half the time: no underflow, no NaN.
+    let e1 = vec![(set, vec![600, 200, 150, 50])];
+    let e2 = vec![(set, vec![100, 500, 300, 100])];
+    for k in 0..10_000_000u32 {
+        m.apply_counts(if k % 2 == 0 { &e1 } else { &e2 }).unwrap();
+    }
+    let b = m.record(&set).unwrap();
+    assert!(b.log_p.iter().all(|v| v.is_finite()), "{:?}", b.log_p);
+    let total: f64 = b.probabilities().iter().sum();
+    assert!((total - 1.0).abs() < 1e-9, "{total}");
+    assert_eq!(b.updates, 10_000_000);
+    // Per pair of updates state q gains ln((c1_q + ½)(c2_q + ½)): state 1 (200.5·500.5) beats
+    // state 0 (600.5·100.5); after 5·10^6 pairs the log-odds are exactly 5·10^6 times that.
+    assert_eq!(b.ml_state().0, 1);
+    let want = 5e6 * ((600.5f64 * 100.5) / (200.5 * 500.5)).ln();
+    let got = b.log_p[0] - b.log_p[1];
+    assert!(
+        ((got - want) / want).abs() < 1e-9,
+        "log-odds {got} vs {want}"
+    );
+}
+
+#[test]
+fn merged_counts_equal_sampling_the_coarser_calculus_statistically() {
+    let edc = Calculus::builtin("edc").unwrap();
+    let sc = scan(
+        &[
+            (1, [0.0, 0.0]),
+            (2, [0.0, 2.0]),
+            (3, [0.4, 1.2]),
+            (4, [-1.0, 0.1]),
+        ],
+        0.6,
+    );
+    let s = 20_000;
+    let fine = step_counts(&edc, &ScanSamples::draw(&sc, s, 1, 0), Orderings::All).unwrap();
+    for name in &qsr_core::POINT_CALCULI[1..] {
+        let coarse = Calculus::builtin(name).unwrap();
+        let merge = edc.merge_map(&coarse).unwrap();
+        let direct =
+            step_counts(&coarse, &ScanSamples::draw(&sc, s, 2, 0), Orderings::All).unwrap();
+        for ((set, f), (set2, d)) in fine.iter().zip(&direct) {
+            assert_eq!(set, set2);
+            let m = merge_counts(&merge, f);
+            // Two independent binomial estimates of the same p: |p1 − p2| < 5·√(2p(1−p)/s).
+            for (a, b) in m.iter().zip(d) {
+                let (pa, pb) = (f64::from(*a) / s as f64, f64::from(*b) / s as f64);
+                let p = 0.5 * (pa + pb);
+                assert!(
+                    (pa - pb).abs() <= 5.0 * (2.0 * p * (1.0 - p) / s as f64).sqrt() + 1e-9,
+                    "{name} {set:?}: {m:?} vs {d:?}"
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn the_floor_keeps_every_state_possible() {
+    let counts = [10, 0, 0, 0];
+    let ll = log_likelihood(&counts, 0.0);
+    assert_eq!(ll[1], f64::NEG_INFINITY);
+    let ll = log_likelihood(&counts, 1.0);
+    assert!((ll[0].exp() - 11.0 / 14.0).abs() < 1e-12);
+    assert!((ll[1].exp() - 1.0 / 14.0).abs() < 1e-12);
+    // Without a floor, contradicting evidence restarts the set and is reported.
+    let mut m = Pqrm::new(
+        Calculus::builtin("quadrant").unwrap(),
+        PqrmConfig {
+            floor: 0.0,
+            ..PqrmConfig::default()
+        },
+    )
+    .unwrap();
+    let set = LandmarkSet::new(1, 2, 3);
+    m.apply_counts(&[(set, vec![5, 0, 0, 0])]).unwrap();
+    let r = m.apply_counts(&[(set, vec![0, 5, 0, 0])]).unwrap();
+    assert_eq!(r.conflicts, 1);
+    assert_eq!(m.record(&set).unwrap().ml_state().0, 1);
+}
+
+#[test]
+fn range_bearing_covariance_matches_the_propagated_noise() {
+    use rand::SeedableRng;
+    use rand_distr::{Distribution, Normal};
+    let (r, b, sr, sb) = (8.0, 0.7, 0.1, 0.01);
+    let o = Observation::from_range_bearing(LandmarkId(1), r, b, sr, sb).unwrap();
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(1);
+    let (nr, nb) = (Normal::new(0.0, sr).unwrap(), Normal::new(0.0, sb).unwrap());
+    let n = 200_000;
+    let pts: Vec<[f64; 2]> = (0..n)
+        .map(|_| {
+            let (rr, bb) = (r + nr.sample(&mut rng), b + nb.sample(&mut rng));
+            [rr * bb.cos(), rr * bb.sin()]
+        })
+        .collect();
+    let mean = [
+        pts.iter().map(|p| p[0]).sum::<f64>() / n as f64,
+        pts.iter().map(|p| p[1]).sum::<f64>() / n as f64,
+    ];
+    let cov = |i: usize, j: usize| {
+        pts.iter()
+            .map(|p| (p[i] - mean[i]) * (p[j] - mean[j]))
+            .sum::<f64>()
+            / n as f64
+    };
+    for (i, j) in [(0, 0), (0, 1), (1, 1)] {
+        assert!(
+            (cov(i, j) - o.cov[i][j]).abs() < 0.03 * o.cov[0][0].max(o.cov[1][1]),
+            "cov[{i}][{j}] {} vs {}",
+            cov(i, j),
+            o.cov[i][j]
+        );
+    }
+    assert!((mean[0] - o.mean[0]).abs() < 1e-3 && (mean[1] - o.mean[1]).abs() < 1e-3);
+}
+
+#[test]
+fn bad_inputs_get_typed_errors() {
+    let id = LandmarkId(1);
+    assert!(matches!(
+        Observation::new(id, [f64::NAN, 0.0], Z),
+        Err(PqrmError::NonFinite(_))
+    ));
+    assert!(matches!(
+        Observation::new(id, [0.0, 0.0], [[1.0, 0.5], [0.4, 1.0]]),
+        Err(PqrmError::BadCovariance {
+            reason: "not symmetric",
+            ..
+        })
+    ));
+    assert!(matches!(
+        Observation::new(id, [0.0, 0.0], [[-1.0, 0.0], [0.0, 1.0]]),
+        Err(PqrmError::BadCovariance {
+            reason: "negative variance",
+            ..
+        })
+    ));
+    assert!(matches!(
+        Observation::new(id, [0.0, 0.0], [[1.0, 2.0], [2.0, 1.0]]),
+        Err(PqrmError::BadCovariance {
+            reason: "negative determinant",
+            ..
+        })
+    ));
+    assert!(matches!(
+        Observation::from_range_bearing(id, -1.0, 0.0, 0.1, 0.1),
+        Err(PqrmError::InvalidConfig(_))
+    ));
+    let o = Observation::isotropic(id, [0.0, 0.0], 1.0).unwrap();
+    assert!(matches!(
+        Scan::new(0.0, 0, vec![o, o]),
+        Err(PqrmError::DuplicateLandmark(1))
+    ));
+    assert!(matches!(
+        Scan::new(f64::INFINITY, 0, vec![o]),
+        Err(PqrmError::NonFinite(_))
+    ));
+    let edc = Calculus::builtin("edc").unwrap();
+    assert!(matches!(
+        Pqrm::new(
+            edc.clone(),
+            PqrmConfig {
+                samples: 0,
+                ..PqrmConfig::default()
+            }
+        ),
+        Err(PqrmError::InvalidConfig(_))
+    ));
+    assert!(matches!(
+        Pqrm::new(
+            edc.clone(),
+            PqrmConfig {
+                floor: -1.0,
+                ..PqrmConfig::default()
+            }
+        ),
+        Err(PqrmError::InvalidConfig(_))
+    ));
+    assert!(matches!(
+        Pqrm::new(Calculus::builtin("star-4").unwrap(), PqrmConfig::default()),
+        Err(PqrmError::InvalidConfig(_))
+    ));
+    // Coincident landmarks without noise: a typed error, and the map is unchanged.
+    let mut m = Pqrm::new(edc, PqrmConfig::default()).unwrap();
+    let err = m
+        .update(&scan(
+            &[(1, [1.0, 1.0]), (2, [1.0, 1.0]), (3, [0.0, 5.0])],
+            0.0,
+        ))
+        .unwrap_err();
+    assert!(
+        matches!(err, PqrmError::CoincidentLandmarks { .. }),
+        "{err}"
+    );
+    assert!(m.is_empty());
+    assert!(matches!(
+        Pqrm::from_json("{\"format\": \"other\"}"),
+        Err(PqrmError::Format(_))
+    ));
+}
+
+#[test]
+fn the_closed_form_orderings_equal_classifying_each_frame_directly() {
+    use pqrm::likelihood::set_counts;
+    let edc = Calculus::builtin("edc").unwrap();
+    let sc = scan(
+        &[
+            (4, [0.0, 0.0]),
+            (7, [0.3, 1.1]),
+            (9, [-0.4, 0.5]),
+            (12, [1.5, 0.2]),
+        ],
+        0.5,
+    );
+    let samples = ScanSamples::draw(&sc, 2000, 17, 3);
+    let fast = step_counts(&edc, &samples, Orderings::All).unwrap();
+    assert_eq!(fast.len(), 4 * 3 * 2);
+    let index = |id: LandmarkId| samples.ids().iter().position(|x| *x == id).unwrap();
+    let mut buf = Vec::new();
+    for (set, counts) in &fast {
+        let [a, b, c] = set.0;
+        let direct = set_counts(&edc, &samples, [index(a), index(b), index(c)], &mut buf).unwrap();
+        assert_eq!(counts, &direct, "{set:?}");
+    }
+    let canonical = step_counts(&edc, &samples, Orderings::Canonical).unwrap();
+    assert_eq!(canonical.len(), 4);
+    assert!(canonical.iter().all(|(s, _)| s.is_canonical()));
+}

@@ -1,0 +1,261 @@
+//! The map: persistence, merging, derived orderings, determinism, the studies in quick mode,
+//! MRCLAM end to end, and the embedding example.
+#![allow(clippy::unwrap_used)] // tests: a panic is the failure report
+
+use pqrm::likelihood::{LandmarkSet, Orderings};
+use pqrm::study::{MonteCarloConfig, noise_check, run_monte_carlo, run_real};
+use pqrm::{LandmarkId, Observation, Pqrm, PqrmConfig, Scan};
+use qsr_core::Calculus;
+
+#[path = "../examples/perception_loop.rs"]
+#[allow(dead_code)]
+mod perception_loop;
+
+fn scans(n: usize) -> Vec<Scan> {
+    let pts = [[0.0, 0.0], [0.0, 4.0], [1.5, 2.2], [-2.0, 1.0], [3.0, 5.0]];
+    (0..n)
+        .map(|k| {
+            let obs = pts
+                .iter()
+                .enumerate()
+                .filter(|(i, _)| (i + k) % 5 != 0 || n < 3)
+                .map(|(i, p)| Observation::isotropic(LandmarkId(i as u32), *p, 0.8).unwrap())
+                .collect();
+            Scan::new(k as f64, 0, obs).unwrap()
+        })
+        .collect()
+}
+
+fn build(calc: &str, scans: &[Scan], orderings: Orderings) -> Pqrm {
+    let mut m = Pqrm::new(
+        Calculus::builtin(calc).unwrap(),
+        PqrmConfig {
+            samples: 400,
+            orderings,
+            seed: 3,
+            ..PqrmConfig::default()
+        },
+    )
+    .unwrap();
+    for s in scans {
+        m.update(s).unwrap();
+    }
+    m
+}
+
+#[test]
+fn a_saved_map_loads_back_identically() {
+    let m = build("edc", &scans(6), Orderings::All);
+    let dir = std::env::temp_dir().join(format!("pqrm-save-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("map.json");
+    m.save(&path).unwrap();
+    let back = Pqrm::load(&path).unwrap();
+    assert_eq!(back.len(), m.len());
+    let (x, y) = (back.to_json().unwrap(), m.to_json().unwrap());
+    let at = x.bytes().zip(y.bytes()).position(|(a, b)| a != b);
+    assert!(
+        at.is_none() && x.len() == y.len(),
+        "round trip changed the map at byte {at:?}: …{}…",
+        at.map_or(String::new(), |i| x
+            [i.saturating_sub(80)..(i + 40).min(x.len())]
+            .to_owned())
+    );
+    // A malformed file is a typed error, and nothing half-written stays behind on save.
+    std::fs::write(
+        dir.join("bad.json"),
+        "{\"format\":\"qrm-pqrm\",\"version\":99}",
+    )
+    .unwrap();
+    assert!(Pqrm::load(&dir.join("bad.json")).is_err());
+    assert!(!dir.join("map.json.tmp").exists());
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn merging_two_maps_equals_one_map_of_all_the_evidence() {
+    let calc = Calculus::builtin("double-cross").unwrap();
+    let cfg = PqrmConfig::default();
+    let set = LandmarkSet::new(1, 2, 3);
+    let other = LandmarkSet::new(2, 1, 3);
+    let ev = [
+        vec![(set, vec![50, 20, 10, 5, 3, 2])],
+        vec![
+            (set, vec![30, 40, 10, 5, 3, 2]),
+            (other, vec![1, 2, 3, 4, 5, 75]),
+        ],
+    ];
+    let mut a = Pqrm::new(calc.clone(), cfg).unwrap();
+    a.apply_counts(&ev[0]).unwrap();
+    let mut b = Pqrm::new(calc.clone(), cfg).unwrap();
+    b.apply_counts(&ev[1]).unwrap();
+    let mut all = Pqrm::new(calc.clone(), cfg).unwrap();
+    all.apply_counts(&ev[0]).unwrap();
+    all.apply_counts(&ev[1]).unwrap();
+    a.merge(&b).unwrap();
+    for s in [set, other] {
+        let (x, y) = (a.record(&s).unwrap(), all.record(&s).unwrap());
+        for (u, v) in x.log_p.iter().zip(&y.log_p) {
+            assert!((u - v).abs() < 1e-12);
+        }
+    }
+    let edc = Pqrm::new(Calculus::builtin("edc").unwrap(), cfg).unwrap();
+    assert!(
+        a.merge(&edc).is_err(),
+        "maps of different calculi do not merge"
+    );
+}
+
+#[test]
+fn canonical_maps_derive_the_other_orderings() {
+    let sc = scans(5);
+    let all = build("edc", &sc, Orderings::All);
+    let canon = build("edc", &sc, Orderings::Canonical);
+    assert_eq!(canon.len() * 6, all.len());
+    // The inverse is one-to-one in general position and both maps saw the same samples:
+    // the derived {B, A : C} equals the recorded one.
+    let asked = LandmarkSet::new(2, 1, 3);
+    let derived = canon.belief(asked).unwrap();
+    let recorded = all.belief(asked).unwrap();
+    for (d, r) in derived.iter().zip(&recorded) {
+        assert!((d - r).abs() < 1e-9, "{derived:?} vs {recorded:?}");
+    }
+    // Other permutations spread probability over their sets: still a distribution.
+    let d = canon.belief(LandmarkSet::new(3, 1, 2)).unwrap();
+    assert!((d.iter().sum::<f64>() - 1.0).abs() < 1e-9);
+    assert!(canon.belief(LandmarkSet::new(1, 2, 9)).is_none());
+}
+
+#[test]
+fn results_do_not_depend_on_the_thread_count() {
+    let sc = scans(8);
+    let run = |threads| {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap()
+            .install(|| build("edc", &sc, Orderings::All).to_json().unwrap())
+    };
+    assert_eq!(run(1), run(2));
+    let study = |threads| {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap()
+            .install(|| {
+                serde_json::to_string(
+                    &run_monte_carlo(
+                        &MonteCarloConfig {
+                            trials: 3,
+                            sigmas: vec![0.0, 20.0],
+                            ..MonteCarloConfig::quick()
+                        },
+                        &|| {},
+                    )
+                    .unwrap(),
+                )
+                .unwrap()
+            })
+    };
+    assert_eq!(study(1), study(2));
+}
+
+#[test]
+fn the_quick_monte_carlo_study_behaves_as_the_thesis_says() {
+    let r = run_monte_carlo(&MonteCarloConfig::quick(), &|| {}).unwrap();
+    let row = |calc: &str, sigma: f64| {
+        r.levels
+            .iter()
+            .find(|l| l.calculus == calc && l.sigma_r == sigma)
+            .unwrap()
+    };
+    for calc in qsr_core::POINT_CALCULI {
+        let base = &r.baselines[calc];
+        // Noise-free maps are right; every level beats a random guess (Fig 2.11a).
+        assert_eq!(row(calc, 0.0).error_rate.mean, 0.0, "{calc}");
+        for sigma in [1.0, 10.0, 50.0, 100.0] {
+            assert!(
+                row(calc, sigma).error_rate.mean < base.error_rate,
+                "{calc} at {sigma}"
+            );
+        }
+        // More noise, more entropy.
+        assert!(row(calc, 100.0).mean_entropy.mean > row(calc, 1.0).mean_entropy.mean);
+    }
+    // EDC: mean neighbour distance < 1 for σ_N < 1 (σ_R = 10 m is σ_N = 0.35), entropy well
+    // below ln 20 even at σ_N = 3.5 (Figs 2.6, 2.7).
+    assert!(row("edc", 10.0).neighbor_distance.mean < 1.0);
+    assert!(row("edc", 100.0).mean_entropy.mean < 20f64.ln() - 0.5);
+    assert!(!r.confusion.is_empty() && !r.wrong.is_empty());
+}
+
+#[test]
+fn mrclam_end_to_end_quick_subset() {
+    let Some(shared) = qrm_shared() else {
+        eprintln!("SKIPPED: shared/data/mrclam-dataset7 not found beside the checkout");
+        return;
+    };
+    let mut data =
+        pqrm::loaders::read_mrclam(&shared, pqrm::loaders::RangeBearingNoise::MRCLAM).unwrap();
+    assert!(data.skipped > 0, "robot-to-robot sightings are skipped");
+    assert_eq!(data.truth.as_ref().unwrap().positions.len(), 15);
+    data.scans.retain(|s| s.observations.len() >= 3);
+    assert!(
+        data.scans.len() > 500,
+        "about a thousand frames see three landmarks or more"
+    );
+    data.scans.truncate(150);
+    let calculi: Vec<String> = ["edc", "double-cross", "left-right"]
+        .iter()
+        .map(|s| (*s).to_owned())
+        .collect();
+    let cfg = PqrmConfig {
+        samples: 200,
+        ..PqrmConfig::default()
+    };
+    let results = run_real(&data, &calculi, cfg, &|| {}).unwrap();
+    for r in &results {
+        assert!(r.pqrm.n_scored > 50, "{}", r.calculus);
+        assert!(
+            r.pqrm.error_rate < r.random.error_rate,
+            "{}: PQRM beats a random guess",
+            r.calculus
+        );
+        // Filtering many frames is at least as good as judging each frame alone.
+        assert!(
+            r.pqrm.error_rate <= r.per_frame.error_rate + 0.05,
+            "{}: {} vs {}",
+            r.calculus,
+            r.pqrm.error_rate,
+            r.per_frame.error_rate
+        );
+    }
+    let check = noise_check(&data).unwrap();
+    assert!(check.pairs > 100 && check.z_std > 0.0);
+}
+
+fn qrm_shared() -> Option<std::path::PathBuf> {
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../../shared/data/mrclam-dataset7");
+    dir.is_dir().then_some(dir)
+}
+
+#[test]
+fn the_embedding_example_runs() {
+    let p = perception_loop::run();
+    assert!((p.iter().sum::<f64>() - 1.0).abs() < 1e-9);
+    // Landmark 3 at (5, 2) is right of 1→2 ((2,8) → (9,9)), below A: EDC 20 (right, y < 0).
+    let edc = Calculus::builtin("edc").unwrap();
+    let truth = edc
+        .classify_triplet(
+            qsr_core::Point2::new(2.0, 8.0),
+            qsr_core::Point2::new(9.0, 9.0),
+            qsr_core::Point2::new(5.0, 2.0),
+        )
+        .unwrap();
+    let best = p
+        .iter()
+        .enumerate()
+        .fold(0, |b, (i, v)| if *v > p[b] { i } else { b });
+    assert_eq!(best, truth.index());
+}
