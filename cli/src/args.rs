@@ -20,6 +20,134 @@ pub enum Command {
     /// Inspect, use and draw qualitative calculi.
     #[command(subcommand)]
     Calculus(CalculusCmd),
+    /// Probabilistic qualitative relational mapping: estimator, studies.
+    #[command(subcommand)]
+    Pqrm(PqrmCmd),
+    /// Build a PQRM from an observation file and score it against ground truth.
+    Map(MapArgs),
+}
+
+/// `qrm pqrm ...`.
+#[derive(Debug, Subcommand)]
+pub enum PqrmCmd {
+    /// Single-observation p(R | Z) (eq. 2.9) for JSON lines on stdin:
+    /// `{"points": [[ax,ay],[bx,by],[cx,cy]], "cov": [[sxx,sxy,syy], ...]}` →
+    /// `{"states": [...], "p": [...]}`.
+    Prob {
+        /// Calculus name or spec file.
+        #[arg(long)]
+        calculus: String,
+        /// Samples per point.
+        #[arg(long, default_value_t = 1000)]
+        samples: usize,
+        /// Seed of the sampler.
+        #[arg(long, default_value_t = 0)]
+        seed: u64,
+        /// Pseudo-counts per state (0: plain sample frequencies).
+        #[arg(long, default_value_t = 0.0)]
+        floor: f64,
+    },
+    /// The Monte Carlo study of thesis §2.3.1 (Figs 2.6–2.11) with a report.
+    Study(StudyArgs),
+    /// Map a recorded dataset with every point calculus: PQRM vs per-frame baseline
+    /// (the analogue of thesis §2.3.2, Figs 2.14–2.16).
+    Real(RealArgs),
+}
+
+/// `qrm pqrm study`.
+#[derive(Debug, clap::Args)]
+pub struct StudyArgs {
+    /// Small study (5 noise levels, 12 trials, 200 samples): under a minute.
+    #[arg(long)]
+    pub quick: bool,
+    /// Calculi, finest first (default: the six point calculi).
+    #[arg(long, value_delimiter = ',')]
+    pub calculi: Option<Vec<String>>,
+    /// Trials per noise level (full scale: 1000).
+    #[arg(long)]
+    pub trials: Option<usize>,
+    /// Samples per landmark per step (full scale: 1000).
+    #[arg(long)]
+    pub samples: Option<usize>,
+    /// Noise levels σ_R in metres (default: 0, 5, ..., 100).
+    #[arg(long, value_delimiter = ',')]
+    pub sigmas: Option<Vec<f64>>,
+    /// Landmarks per world.
+    #[arg(long)]
+    pub landmarks: Option<usize>,
+    /// Seed.
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    /// Output directory.
+    #[arg(long)]
+    pub out: PathBuf,
+}
+
+/// `qrm pqrm real`.
+#[derive(Debug, clap::Args)]
+pub struct RealArgs {
+    /// Dataset kind (only `mrclam` has ground truth here).
+    #[arg(long, default_value = "mrclam")]
+    pub dataset: String,
+    /// Dataset directory (default: ../shared/data/mrclam-dataset7).
+    #[arg(long)]
+    pub input: Option<PathBuf>,
+    /// Samples per landmark per frame.
+    #[arg(long, default_value_t = 1000)]
+    pub samples: usize,
+    /// Range noise model (m).
+    #[arg(long, default_value_t = pqrm::loaders::RangeBearingNoise::MRCLAM.sigma_range)]
+    pub sigma_range: f64,
+    /// Bearing noise model (rad).
+    #[arg(long, default_value_t = pqrm::loaders::RangeBearingNoise::MRCLAM.sigma_bearing)]
+    pub sigma_bearing: f64,
+    /// Use only the first N frames (with three or more landmarks).
+    #[arg(long)]
+    pub max_frames: Option<usize>,
+    /// Seed.
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    /// Output directory.
+    #[arg(long)]
+    pub out: PathBuf,
+}
+
+/// `qrm map`.
+#[derive(Debug, clap::Args)]
+pub struct MapArgs {
+    /// Input format: csv, mrclam or g2o.
+    #[arg(long)]
+    pub format: String,
+    /// Input file (csv, g2o) or directory (mrclam).
+    #[arg(long)]
+    pub input: PathBuf,
+    /// Calculus name or spec file.
+    #[arg(long, default_value = "edc")]
+    pub calculus: String,
+    /// Ground truth `landmark,x,y` CSV (MRCLAM brings its own).
+    #[arg(long)]
+    pub truth: Option<PathBuf>,
+    /// Range noise for range-bearing formats (m).
+    #[arg(long, default_value_t = pqrm::loaders::RangeBearingNoise::MRCLAM.sigma_range)]
+    pub sigma_range: f64,
+    /// Bearing noise for range-bearing formats (rad).
+    #[arg(long, default_value_t = pqrm::loaders::RangeBearingNoise::MRCLAM.sigma_bearing)]
+    pub sigma_bearing: f64,
+    /// Samples per landmark per step.
+    #[arg(long, default_value_t = 1000)]
+    pub samples: usize,
+    /// Pseudo-counts per state.
+    #[arg(long, default_value_t = 1.0)]
+    pub floor: f64,
+    /// Record all orderings or one per unordered set: all, canonical.
+    #[arg(long, default_value = "all")]
+    pub orderings: String,
+    /// Seed.
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    /// Output directory (map.json, summary.json).
+    #[arg(long)]
+    pub out: PathBuf,
 }
 
 /// `qrm calculus ...`. NAME is a built-in calculus (see `list`) or a path to a TOML/JSON spec.

@@ -9,6 +9,9 @@
 mod args;
 mod calculus_cmd;
 mod output;
+mod plot;
+mod pqrm_cmd;
+mod progress;
 
 use std::process::ExitCode;
 
@@ -18,6 +21,8 @@ fn main() -> ExitCode {
     let cli = args::Cli::parse();
     let result = match cli.command {
         args::Command::Calculus(cmd) => calculus_cmd::run(cmd),
+        args::Command::Pqrm(cmd) => pqrm_cmd::run(cmd),
+        args::Command::Map(a) => pqrm_cmd::map(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -90,7 +90,7 @@ pub struct MonteCarloConfig {
     /// Pseudo-count floor of the mapper.
     pub floor: f64,
     /// σ_R values at which confusion matrices and wrongly mapped triplets are recorded
-    /// (thesis Figs 2.8, 2.9: 1 m and 50 m).
+    /// (thesis Figs 2.8, 2.9: 1 m and 50 m); values not in `sigmas` run as extra levels.
     pub detail_sigmas: Vec<f64>,
     /// Seed.
     pub seed: u64,

@@ -86,7 +86,7 @@ pub use neighbours::NeighbourGraph;
 pub use partition::{ConstraintPartition, Partition, ROUNDING_MARGIN, RasterPartition};
 pub use permute::{Permutation, PermutationTable};
 #[cfg(feature = "svg")]
-pub use render::{RenderOptions, render_svg};
+pub use render::{RenderOptions, register_font, render_svg};
 pub use spec::{
     CalculusSpec, ConstraintSpec, MAX_CONSTRAINTS, OutsideRule, RasterSpec, Shape, Side, StateSpec,
 };

@@ -36,7 +36,9 @@ impl Default for RenderOptions {
     }
 }
 
-fn register_font() {
+/// Registers the bundled DejaVu Sans as plotters' `"sans-serif"` (idempotent): every plot
+/// of qrm draws text with it, so no system font library is needed.
+pub fn register_font() {
     static ONCE: std::sync::Once = std::sync::Once::new();
     ONCE.call_once(|| {
         // The font is compiled in; registration cannot fail for it.

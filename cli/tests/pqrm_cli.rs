@@ -1,0 +1,324 @@
+//! `qrm pqrm prob`, `qrm map`, `qrm pqrm study --quick` and `qrm pqrm real` as a user runs them.
+#![allow(clippy::unwrap_used)] // tests: a panic is the failure report
+
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output, Stdio};
+
+fn qrm(args: &[&str], stdin: &str) -> Output {
+    let mut child = Command::new(env!("CARGO_BIN_EXE_qrm"))
+        .args(args)
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    child
+        .stdin
+        .take()
+        .unwrap()
+        .write_all(stdin.as_bytes())
+        .unwrap();
+    child.wait_with_output().unwrap()
+}
+
+fn ok(args: &[&str], stdin: &str) -> String {
+    let out = qrm(args, stdin);
+    assert!(
+        out.status.success(),
+        "qrm {args:?} failed: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    String::from_utf8(out.stdout).unwrap()
+}
+
+fn tmp(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("qrm-pqrm-cli-{}-{name}", std::process::id()));
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+#[test]
+fn prob_gives_the_single_observation_distribution() {
+    let line = r#"{"points": [[0,0],[0,10],[-1,5]], "cov": [[0,0,0],[0,0,0],[1,0,1]]}"#;
+    let out = ok(
+        &[
+            "pqrm",
+            "prob",
+            "--calculus",
+            "left-right",
+            "--samples",
+            "40000",
+            "--seed",
+            "3",
+        ],
+        &format!("{line}\n{line}\n"),
+    );
+    let lines: Vec<serde_json::Value> = out
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect();
+    assert_eq!(lines.len(), 2);
+    assert_eq!(lines[0]["states"], serde_json::json!(["left", "right"]));
+    let p_left = lines[0]["p"][0].as_f64().unwrap();
+    // Φ(1) = 0.8413; sampling error ≈ 0.002.
+    assert!((p_left - 0.8413).abs() < 0.01, "{p_left}");
+    assert_eq!(lines[0], lines[1], "same seed, same answer");
+    // No floor by default: a certain configuration gives exactly 1.
+    let sure = r#"{"points": [[0,0],[0,1],[-3,0.5]], "cov": [[0,0,0],[0,0,0],[0,0,0]]}"#;
+    let v: serde_json::Value = serde_json::from_str(
+        ok(
+            &["pqrm", "prob", "--calculus", "edc", "--samples", "100"],
+            sure,
+        )
+        .trim(),
+    )
+    .unwrap();
+    let p: Vec<f64> = v["p"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|x| x.as_f64().unwrap())
+        .collect();
+    assert_eq!(p[4], 1.0, "state 5 (left, upper middle, far)");
+    // Bad input: line number in the message, non-zero exit, no partial output.
+    let out = qrm(
+        &["pqrm", "prob", "--calculus", "edc"],
+        &format!(
+            "{sure}\n{{\"points\": [[0,0],[0,0],[1,1]], \"cov\": [[0,0,0],[0,0,0],[0,0,0]]}}\n"
+        ),
+    );
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("line 2"));
+    assert!(out.stdout.is_empty());
+    let out = qrm(
+        &["pqrm", "prob", "--calculus", "edc"],
+        "{\"points\": [[0,0],[0,1],[1,1]], \"cov\": [[1,2,1],[0,0,0],[0,0,0]]}\n",
+    );
+    assert!(String::from_utf8_lossy(&out.stderr).contains("positive semi-definite"));
+}
+
+fn write_csv_dataset(dir: &Path) -> (PathBuf, PathBuf) {
+    // Four landmarks seen from three poses (robot frame = world frame here), σ = 0.2 m.
+    let lm = [(1, 0.0, 0.0), (2, 0.3, 4.0), (3, 3.1, 2.6), (4, -2.2, 1.3)];
+    let mut csv = String::from("t,robot,landmark,x,y,cxx,cxy,cyy\n");
+    for t in 0..3 {
+        for (id, x, y) in lm {
+            let jitter = 0.05 * f64::from(t);
+            csv.push_str(&format!(
+                "{t},0,{id},{},{},0.04,0,0.04\n",
+                x + jitter,
+                y - jitter
+            ));
+        }
+    }
+    let mut truth = String::from("landmark,x,y\n");
+    for (id, x, y) in lm {
+        truth.push_str(&format!("{id},{x},{y}\n"));
+    }
+    std::fs::write(dir.join("obs.csv"), csv).unwrap();
+    std::fs::write(dir.join("truth.csv"), truth).unwrap();
+    (dir.join("obs.csv"), dir.join("truth.csv"))
+}
+
+#[test]
+fn map_builds_saves_and_scores_a_pqrm() {
+    let dir = tmp("map");
+    let (obs, truth) = write_csv_dataset(&dir);
+    let out = dir.join("out");
+    ok(
+        &[
+            "map",
+            "--format",
+            "csv",
+            "--input",
+            obs.to_str().unwrap(),
+            "--calculus",
+            "edc",
+            "--truth",
+            truth.to_str().unwrap(),
+            "--samples",
+            "300",
+            "--out",
+            out.to_str().unwrap(),
+        ],
+        "",
+    );
+    let s: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(s["n_sets"], 24, "4 landmarks: 4·3·2 ordered triplets");
+    for key in [
+        "mean_entropy",
+        "error_rate",
+        "mean_neighbor_distance",
+        "p_ml_mean",
+    ] {
+        assert!(s[key].is_number(), "{key} in {s}");
+    }
+    assert_eq!(s["top_n_error"].as_array().unwrap().len(), 20);
+    assert!(s["error_rate"].as_f64().unwrap() < 0.2);
+    assert!(out.join("map.json").exists());
+    // A malformed file names its line.
+    std::fs::write(
+        dir.join("bad.csv"),
+        "t,robot,landmark,x,y,cxx,cxy,cyy\n0,0,1,0,0,1,0,1\n0,0,2,zero,0,1,0,1\n",
+    )
+    .unwrap();
+    let o = qrm(
+        &[
+            "map",
+            "--format",
+            "csv",
+            "--input",
+            dir.join("bad.csv").to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+        ],
+        "",
+    );
+    assert!(!o.status.success());
+    assert!(
+        String::from_utf8_lossy(&o.stderr).contains("bad.csv:3"),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let o = qrm(
+        &[
+            "map",
+            "--format",
+            "xml",
+            "--input",
+            obs.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+        ],
+        "",
+    );
+    assert!(String::from_utf8_lossy(&o.stderr).contains("unknown --format"));
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+fn mrclam() -> Option<PathBuf> {
+    let d = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../shared/data/mrclam-dataset7");
+    d.is_dir().then_some(d)
+}
+
+#[test]
+fn map_reads_mrclam_with_its_ground_truth() {
+    let Some(data) = mrclam() else {
+        eprintln!("SKIPPED: shared/data/mrclam-dataset7 not found");
+        return;
+    };
+    let out = tmp("mrclam");
+    ok(
+        &[
+            "map",
+            "--format",
+            "mrclam",
+            "--input",
+            data.to_str().unwrap(),
+            "--calculus",
+            "double-cross",
+            "--samples",
+            "60",
+            "--out",
+            out.to_str().unwrap(),
+        ],
+        "",
+    );
+    let s: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    assert!(s["n_sets"].as_u64().unwrap() > 500);
+    assert!(
+        s["error_rate"].as_f64().unwrap() < 5.0 / 6.0,
+        "better than a random guess: {s}"
+    );
+    assert_eq!(s["top_n_error"].as_array().unwrap().len(), 6);
+    std::fs::remove_dir_all(&out).ok();
+}
+
+#[test]
+fn the_quick_study_writes_data_plots_and_a_report() {
+    let out = tmp("study");
+    ok(
+        &[
+            "pqrm",
+            "study",
+            "--quick",
+            "--seed",
+            "2",
+            "--out",
+            out.to_str().unwrap(),
+        ],
+        "",
+    );
+    for f in [
+        "levels.csv",
+        "baselines.csv",
+        "wrong_triplets.csv",
+        "study.json",
+        "report.md",
+        "fig2_6_neighbor_distance.svg",
+        "fig2_7_edc_entropy.png",
+        "fig2_8a_wrong_triplets.svg",
+        "fig2_9b_confusion.png",
+        "fig2_10a_entropy.svg",
+        "fig2_10b_normalized_entropy.png",
+        "fig2_11a_error_rate.svg",
+        "fig2_11b_p_ml.png",
+    ] {
+        assert!(out.join(f).exists(), "{f} missing");
+    }
+    let levels = std::fs::read_to_string(out.join("levels.csv")).unwrap();
+    assert_eq!(
+        levels.lines().count(),
+        1 + 6 * 5,
+        "six calculi × five levels"
+    );
+    let report = std::fs::read_to_string(out.join("report.md")).unwrap();
+    assert!(report.contains("| Fig 2.6") && report.contains("| Fig 2.11a"));
+    let png = std::fs::read(out.join("fig2_7_edc_entropy.png")).unwrap();
+    assert_eq!(&png[1..4], b"PNG");
+    std::fs::remove_dir_all(&out).ok();
+}
+
+#[test]
+fn the_real_data_study_runs_on_a_subset() {
+    let Some(data) = mrclam() else {
+        eprintln!("SKIPPED: shared/data/mrclam-dataset7 not found");
+        return;
+    };
+    let out = tmp("real");
+    ok(
+        &[
+            "pqrm",
+            "real",
+            "--input",
+            data.to_str().unwrap(),
+            "--max-frames",
+            "120",
+            "--samples",
+            "80",
+            "--out",
+            out.to_str().unwrap(),
+        ],
+        "",
+    );
+    for f in [
+        "real.json",
+        "real.csv",
+        "report.md",
+        "fig2_14_entropy_histogram.svg",
+        "fig2_15_neighbor_distance.png",
+        "fig2_16_top_n_error.svg",
+    ] {
+        assert!(out.join(f).exists(), "{f} missing");
+    }
+    let csv = std::fs::read_to_string(out.join("real.csv")).unwrap();
+    assert_eq!(
+        csv.lines().count(),
+        1 + 12,
+        "six calculi × (PQRM, per-frame)"
+    );
+    std::fs::remove_dir_all(&out).ok();
+}
