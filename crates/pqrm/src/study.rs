@@ -239,6 +239,7 @@ pub struct MonteCarloResult {
     pub wrong: Vec<WrongTriplet>,
 }
 
+#[derive(Debug, Clone)]
 struct TrialOutcome {
     metrics: Vec<MapMetrics>,
     wrong: Vec<WrongTriplet>,
@@ -358,51 +359,119 @@ fn run_trial(
     Ok(Some(TrialOutcome { metrics, wrong }))
 }
 
-/// Runs the Monte Carlo study. `progress` is called once per finished trial (from worker
-/// threads). Trials run in parallel; the result is identical for any thread count.
-///
-/// # Errors
-/// [`PqrmError::InvalidConfig`]; calculus errors (unknown name, a calculus that is not a
-/// merge of the first).
-pub fn run_monte_carlo(
-    config: &MonteCarloConfig,
-    progress: &(dyn Fn() + Sync),
-) -> Result<MonteCarloResult> {
-    config.validate()?;
-    let family = CalculusFamily::new(&config.calculi)?;
-    let jobs: Vec<(usize, usize)> = (0..config.sigmas.len())
-        .flat_map(|l| (0..config.trials).map(move |t| (l, t)))
-        .collect();
-    let outcomes: Vec<Result<Option<TrialOutcome>>> = jobs
-        .par_iter()
-        .map(|&(l, t)| {
-            let r = run_trial(config, &family, config.sigmas[l], l, t);
-            progress();
-            r
-        })
-        .collect();
-    let q0 = family.calculi[0].n_states();
-    let mut per_level: Vec<Vec<TrialOutcome>> =
-        (0..config.sigmas.len()).map(|_| Vec::new()).collect();
-    for (&(l, _), o) in jobs.iter().zip(outcomes) {
-        if let Some(o) = o? {
-            per_level[l].push(o);
+/// The outcome of one trial, as shards return it (see [`run_monte_carlo_shard`]).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct TrialRecord {
+    /// Index of the noise level in the (completed) level list.
+    pub level: usize,
+    /// Trial index within the level.
+    pub trial: usize,
+    /// Scores of each calculus' map; `None` when the trial produced no map.
+    pub metrics: Option<Vec<MapMetrics>>,
+    /// Wrongly mapped triplets (detail levels only).
+    pub wrong: Vec<WrongTriplet>,
+}
+
+/// The study's levels: `sigmas` plus any detail σ not among them (Figs 2.8, 2.9 use σ_R = 1 m,
+/// which is not on the 5 m grid), sorted.
+fn completed(config: &MonteCarloConfig) -> MonteCarloConfig {
+    let mut c = config.clone();
+    for d in c.detail_sigmas.clone() {
+        if !c.sigmas.contains(&d) {
+            c.sigmas.push(d);
         }
     }
+    c.sigmas.sort_by(f64::total_cmp);
+    c.sigmas.dedup();
+    c
+}
+
+/// Runs trials `start..start + count` of every level: one shard of the study. Trial `t` of
+/// level `l` is seeded by `(seed, l, t)` alone, so shards run anywhere (threads, processes,
+/// a Ray cluster) and [`aggregate_monte_carlo`] of their records equals one
+/// [`run_monte_carlo`].
+///
+/// # Errors
+/// As [`run_monte_carlo`].
+pub fn run_monte_carlo_shard(
+    config: &MonteCarloConfig,
+    start: usize,
+    count: usize,
+    progress: &(dyn Fn() + Sync),
+) -> Result<Vec<TrialRecord>> {
+    config.validate()?;
+    let config = &completed(config);
+    let family = CalculusFamily::new(&config.calculi)?;
+    let end = (start + count).min(config.trials);
+    let jobs: Vec<(usize, usize)> = (0..config.sigmas.len())
+        .flat_map(|l| (start..end).map(move |t| (l, t)))
+        .collect();
+    jobs.par_iter()
+        .map(|&(level, trial)| {
+            let r = run_trial(config, &family, config.sigmas[level], level, trial);
+            progress();
+            r.map(|o| TrialRecord {
+                level,
+                trial,
+                wrong: o.as_ref().map(|o| o.wrong.clone()).unwrap_or_default(),
+                metrics: o.map(|o| o.metrics),
+            })
+        })
+        .collect()
+}
+
+/// Combines trial records (from one run or many shards, in any order) into the study result.
+///
+/// # Errors
+/// [`PqrmError::Mismatch`] when a record does not belong to the configuration or a trial is
+/// missing or duplicated.
+pub fn aggregate_monte_carlo(
+    config: &MonteCarloConfig,
+    records: &[TrialRecord],
+) -> Result<MonteCarloResult> {
+    config.validate()?;
+    let config = &completed(config);
+    let family = CalculusFamily::new(&config.calculi)?;
+    let mut records: Vec<&TrialRecord> = records.iter().collect();
+    records.sort_by_key(|r| (r.level, r.trial));
+    let expected = config.sigmas.len() * config.trials;
+    let in_range = records
+        .iter()
+        .all(|r| r.level < config.sigmas.len() && r.trial < config.trials);
+    let unique = records
+        .windows(2)
+        .all(|w| (w[0].level, w[0].trial) != (w[1].level, w[1].trial));
+    if records.len() != expected || !in_range || !unique {
+        return Err(PqrmError::Mismatch(format!(
+            "{} trial records for {} levels × {} trials (missing, duplicated or foreign records)",
+            records.len(),
+            config.sigmas.len(),
+            config.trials
+        )));
+    }
+    let n_calc = family.calculi.len();
+    if records
+        .iter()
+        .any(|r| r.metrics.as_ref().is_some_and(|m| m.len() != n_calc))
+    {
+        return Err(PqrmError::Mismatch(
+            "trial records were made with other calculi".into(),
+        ));
+    }
+    let q0 = family.calculi[0].n_states();
     let mut levels = Vec::new();
     let mut confusion = Vec::new();
     let mut wrong = Vec::new();
     let sigma_e = config.sigma_e();
-    for (l, outcomes) in per_level.iter().enumerate() {
-        let sigma = config.sigmas[l];
+    for (l, &sigma) in config.sigmas.iter().enumerate() {
+        let outcomes: Vec<&Vec<MapMetrics>> = records
+            .iter()
+            .filter(|r| r.level == l)
+            .filter_map(|r| r.metrics.as_ref())
+            .collect();
         for (ci, calc) in family.calculi.iter().enumerate() {
             let col = |f: &dyn Fn(&MapMetrics) -> f64| {
-                Stat::of(
-                    &outcomes
-                        .iter()
-                        .map(|o| f(&o.metrics[ci]))
-                        .collect::<Vec<_>>(),
-                )
+                Stat::of(&outcomes.iter().map(|o| f(&o[ci])).collect::<Vec<_>>())
             };
             levels.push(LevelResult {
                 calculus: calc.name().to_owned(),
@@ -419,13 +488,15 @@ pub fn run_monte_carlo(
         }
         if config.detail_sigmas.contains(&sigma) {
             let mut total = vec![vec![0u64; q0]; q0];
-            for o in outcomes {
-                for (row, add) in total.iter_mut().zip(&o.metrics[0].confusion) {
+            for o in &outcomes {
+                for (row, add) in total.iter_mut().zip(&o[0].confusion) {
                     for (a, b) in row.iter_mut().zip(add) {
                         *a += b;
                     }
                 }
-                wrong.extend(o.wrong.iter().cloned());
+            }
+            for r in records.iter().filter(|r| r.level == l) {
+                wrong.extend(r.wrong.iter().cloned());
             }
             confusion.push((sigma, total));
         }
@@ -442,6 +513,20 @@ pub fn run_monte_carlo(
         confusion,
         wrong,
     })
+}
+
+/// Runs the Monte Carlo study. `progress` is called once per finished trial (from worker
+/// threads). Trials run in parallel; the result is identical for any thread count.
+///
+/// # Errors
+/// [`PqrmError::InvalidConfig`]; calculus errors (unknown name, a calculus that is not a
+/// merge of the first).
+pub fn run_monte_carlo(
+    config: &MonteCarloConfig,
+    progress: &(dyn Fn() + Sync),
+) -> Result<MonteCarloResult> {
+    let records = run_monte_carlo_shard(config, 0, config.trials, progress)?;
+    aggregate_monte_carlo(config, &records)
 }
 
 /// Per-frame (no filter) scores: each observation of a set judged on its own.

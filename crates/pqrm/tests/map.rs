@@ -259,3 +259,53 @@ fn the_embedding_example_runs() {
         .fold(0, |b, (i, v)| if *v > p[b] { i } else { b });
     assert_eq!(best, truth.index());
 }
+
+#[test]
+fn loaders_read_g2o_landmark_lines_and_reject_bad_ones() {
+    let dir = std::env::temp_dir().join(format!("pqrm-g2o-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let good = dir.join("vp.txt");
+    std::fs::write(
+        &good,
+        "ODOMETRY 0 1 0.1 0 0 1 0 0 1 0 1\nLANDMARK 1 4 3.0 1.0 0.1 0.0 0.1\nLANDMARK 1 7 2.0 -1.0 0.1 0.0 0.1\nLANDMARK 2 4 2.9 1.1 0.1 0.0 0.1\n",
+    )
+    .unwrap();
+    let d = pqrm::loaders::read_g2o(&good).unwrap();
+    assert_eq!(d.scans.len(), 2);
+    assert_eq!(d.scans[0].observations.len(), 2);
+    assert_eq!(d.skipped, 1, "the ODOMETRY line");
+    let bad = dir.join("bad.txt");
+    std::fs::write(&bad, "LANDMARK 1 4 3.0 1.0 0.1 0.0\n").unwrap();
+    let e = pqrm::loaders::read_g2o(&bad).unwrap_err().to_string();
+    assert!(e.contains("bad.txt:1"), "{e}");
+    std::fs::write(&bad, "LANDMARK 1 4 3.0 1.0 0.1 5.0 0.1\n").unwrap();
+    let e = pqrm::loaders::read_g2o(&bad).unwrap_err().to_string();
+    assert!(e.contains("semi-definite"), "{e}");
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn study_shards_merge_into_the_single_run() {
+    use pqrm::study::{aggregate_monte_carlo, run_monte_carlo_shard};
+    let cfg = MonteCarloConfig {
+        trials: 5,
+        sigmas: vec![0.0, 30.0],
+        samples: 60,
+        ..MonteCarloConfig::quick()
+    };
+    let whole = run_monte_carlo(&cfg, &|| {}).unwrap();
+    let mut records = run_monte_carlo_shard(&cfg, 3, 2, &|| {}).unwrap();
+    records.extend(run_monte_carlo_shard(&cfg, 0, 3, &|| {}).unwrap());
+    let merged = aggregate_monte_carlo(&cfg, &records).unwrap();
+    assert_eq!(
+        serde_json::to_string(&merged).unwrap(),
+        serde_json::to_string(&whole).unwrap()
+    );
+    // The detail level σ = 1 m runs although it is not in `sigmas`.
+    assert!(whole.levels.iter().any(|l| l.sigma_r == 1.0));
+    // Missing or duplicated shards are refused.
+    assert!(aggregate_monte_carlo(&cfg, &records[1..]).is_err());
+    let mut dup = records.clone();
+    dup.push(records[0].clone());
+    assert!(aggregate_monte_carlo(&cfg, &dup).is_err());
+}
