@@ -45,6 +45,19 @@ fn bench(c: &mut Criterion) {
         });
     }
     g.finish();
+    // The whole update (sampling, counts, Bayes filter) as the Python binding calls it.
+    let mut g = c.benchmark_group("pqrm_update_m10_s1000");
+    g.sample_size(20);
+    g.throughput(Throughput::Elements((M * (M - 1) * (M - 2) * S) as u64));
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .expect("pool");
+    let mut map = pqrm::Pqrm::new(edc.clone(), pqrm::PqrmConfig::default()).expect("valid");
+    g.bench_function("qrm_1_thread", |b| {
+        b.iter(|| pool.install(|| map.update(&scan).expect("distinct landmarks")));
+    });
+    g.finish();
 }
 
 criterion_group!(benches, bench);

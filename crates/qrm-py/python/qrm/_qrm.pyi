@@ -1,0 +1,128 @@
+"""Type stubs of the native module `qrm._qrm` (import `qrm`, not this)."""
+from typing import Dict, List, Optional, Tuple, final
+
+import numpy as np
+import numpy.typing as npt
+
+__version__: str
+__all__ = [
+    "QrmError",
+    "InvalidInput",
+    "DegenerateFrame",
+    "SpecError",
+    "UnsupportedError",
+    "FormatError",
+    "IoError",
+    "Calculus",
+    "Pqrm",
+    "read_observations",
+    "single_observation",
+    "monte_carlo_shard",
+    "monte_carlo_aggregate",
+    "monte_carlo_config",
+    "builtin_names",
+    "__version__",
+]
+
+class QrmError(Exception):
+    """Base class of every qrm error."""
+
+class InvalidInput(QrmError):
+    """Bad numbers, shapes, covariances or settings."""
+
+class DegenerateFrame(InvalidInput):
+    """Coincident reference points or landmarks."""
+
+class SpecError(QrmError):
+    """A calculus spec or name that is not valid."""
+
+class UnsupportedError(QrmError):
+    """An operation the calculus does not define."""
+
+class FormatError(QrmError):
+    """A malformed saved map or input file."""
+
+class IoError(QrmError):
+    """A file that cannot be read or written."""
+
+def builtin_names() -> List[str]: ...
+
+@final
+class Calculus:
+    @staticmethod
+    def builtin(name: str) -> Calculus: ...
+    @staticmethod
+    def from_spec(path: str) -> Calculus: ...
+    @staticmethod
+    def from_spec_text(text: str, *, format: str = "toml") -> Calculus: ...
+    @property
+    def name(self) -> str: ...
+    @property
+    def frame(self) -> str: ...
+    @property
+    def labels(self) -> List[str]: ...
+    @property
+    def n_states(self) -> int: ...
+    @property
+    def max_entropy(self) -> float: ...
+    def classify(self, points: npt.NDArray[np.float64], *, out: Optional[npt.NDArray[np.int64]] = None) -> npt.NDArray[np.int64]: ...
+    def classify_labels(self, points: npt.NDArray[np.float64]) -> List[str]: ...
+    def neighbours(self) -> Dict[str, object]: ...
+    def compose(self, *, generic: bool = False) -> Dict[str, Dict[str, List[str]]]: ...
+    def permute(self, op: str, *, generic: bool = False) -> Dict[str, List[str]]: ...
+    def merge_map(self, coarse: Calculus) -> npt.NDArray[np.int64]: ...
+    def spec_toml(self) -> str: ...
+    def render_svg(self, *, width: int = 640) -> str: ...
+
+@final
+class Pqrm:
+    def __new__(
+        cls,
+        calculus: Calculus,
+        *,
+        samples: int = 1000,
+        floor: float = 1.0,
+        orderings: str = "all",
+        seed: int = 0,
+    ) -> Pqrm: ...
+    def update(
+        self,
+        t: float,
+        ids: npt.NDArray[np.int64],
+        xy: npt.NDArray[np.float64],
+        cov: npt.NDArray[np.float64],
+        *,
+        robot: int = 0,
+    ) -> Dict[str, int]: ...
+    def belief(self, set: Tuple[int, int, int]) -> Optional[npt.NDArray[np.float64]]: ...
+    def entropy(self) -> Optional[float]: ...
+    def sets(self) -> List[Tuple[int, int, int]]: ...
+    @property
+    def calculus(self) -> Calculus: ...
+    def metrics(self, truth: Dict[int, Tuple[float, float]]) -> Dict[str, object]: ...
+    def merge(self, other: Pqrm) -> None: ...
+    def save(self, path: str) -> None: ...
+    @staticmethod
+    def load(path: str) -> Pqrm: ...
+    def to_json(self) -> str: ...
+    def __len__(self) -> int: ...
+
+def read_observations(
+    path: str,
+    format: str,
+    *,
+    sigma_range: float = 0.15,
+    sigma_bearing: float = 0.01,
+) -> Tuple[List[Dict[str, object]], Optional[Dict[int, Tuple[float, float]]]]: ...
+def single_observation(
+    calculus: Calculus,
+    points: npt.NDArray[np.float64],
+    cov: npt.NDArray[np.float64],
+    *,
+    samples: int = 1000,
+    floor: float = 0.0,
+    seed: int = 0,
+) -> npt.NDArray[np.float64]: ...
+def monte_carlo_shard(config: str, start: int, count: int) -> str: ...
+def monte_carlo_aggregate(config: str, shards: List[str]) -> str: ...
+def monte_carlo_config(*, quick: bool = False) -> str: ...

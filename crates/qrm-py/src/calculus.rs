@@ -1,0 +1,340 @@
+//! `qrm.Calculus`: a thin wrapper of `qsr_core::Calculus`.
+
+use std::collections::BTreeMap;
+
+use numpy::{IntoPyArray, PyArray1, PyArrayMethods, PyReadonlyArray2, PyUntypedArrayMethods};
+use pyo3::prelude::*;
+use qsr_core::{ComposeOptions, Permutation, StateId};
+
+use crate::errors::{invalid, qsr};
+
+/// Names of the built-in calculi.
+#[pyfunction]
+pub(crate) fn builtin_names() -> Vec<&'static str> {
+    qsr_core::BUILTIN_NAMES.to_vec()
+}
+
+/// A qualitative calculus (built-in, from a spec file, or learned).
+#[pyclass(module = "qrm", frozen, from_py_object)]
+#[derive(Clone)]
+pub(crate) struct Calculus {
+    pub(crate) inner: qsr_core::Calculus,
+}
+
+impl Calculus {
+    /// Classification without copying the input when it is C-contiguous (the usual case):
+    /// the array's memory is read as rows in place, with the interpreter released.
+    fn classify_ids(
+        &self,
+        py: Python<'_>,
+        points: &PyReadonlyArray2<'_, f64>,
+    ) -> PyResult<Vec<i64>> {
+        let view = points.as_array();
+        let k = self.inner.frame().input_len();
+        if view.ncols() != k {
+            return Err(invalid(format!(
+                "calculus `{}` takes rows of {k} numbers, got an array of shape {:?}",
+                self.inner.name(),
+                view.shape()
+            )));
+        }
+        let calc = &self.inner;
+        let result: Result<Vec<i64>, qsr_core::QsrError> = match (k, points.as_slice()) {
+            (6, Ok(flat)) => {
+                let (rows, _) = flat.as_chunks::<6>();
+                py.detach(|| {
+                    let mut out = vec![StateId(0); rows.len()];
+                    calc.classify_triplets(rows, &mut out)
+                        .map(|()| out.iter().map(|s| i64::from(s.0)).collect())
+                })
+            }
+            _ => {
+                let rows: Vec<Vec<f64>> = view.rows().into_iter().map(|r| r.to_vec()).collect();
+                py.detach(|| {
+                    rows.iter()
+                        .enumerate()
+                        .map(|(i, r)| {
+                            calc.classify_row(r)
+                                .map(|s| i64::from(s.0))
+                                .map_err(|e| annotate(i, e))
+                        })
+                        .collect()
+                })
+            }
+        };
+        result.map_err(qsr)
+    }
+}
+
+/// Classifies rows into `dst` through a small id buffer (cache-resident), widening to i64 as it
+/// goes: one pass over the output, as the Rust API's caller-provided buffer.
+fn classify_into(
+    calc: &qsr_core::Calculus,
+    rows: &[[f64; 6]],
+    dst: &mut [i64],
+) -> Result<(), qsr_core::QsrError> {
+    const CHUNK: usize = 4096;
+    let mut buf = [StateId(0); CHUNK];
+    for (ci, (r, d)) in rows.chunks(CHUNK).zip(dst.chunks_mut(CHUNK)).enumerate() {
+        let b = &mut buf[..r.len()];
+        if calc.classify_triplets(r, b).is_err() {
+            // Report the first bad row with its index in the whole array.
+            for (i, row) in r.iter().enumerate() {
+                calc.classify_row(row)
+                    .map_err(|e| annotate(ci * CHUNK + i, e))?;
+            }
+        }
+        for (o, s) in d.iter_mut().zip(b.iter()) {
+            *o = i64::from(s.0);
+        }
+    }
+    Ok(())
+}
+
+/// Prefixes a row error with its index, keeping its kind.
+fn annotate(i: usize, e: qsr_core::QsrError) -> qsr_core::QsrError {
+    match e {
+        qsr_core::QsrError::DegenerateFrame { reason } => qsr_core::QsrError::DegenerateFrame {
+            reason: format!("row {i}: {reason}"),
+        },
+        qsr_core::QsrError::NonFinite { what } => qsr_core::QsrError::NonFinite {
+            what: format!("row {i}: {what}"),
+        },
+        other => other,
+    }
+}
+
+fn labels(c: &qsr_core::Calculus, set: &[StateId]) -> Vec<String> {
+    set.iter().map(|s| c.label(*s).to_owned()).collect()
+}
+
+#[pymethods]
+impl Calculus {
+    /// A built-in calculus by name.
+    #[staticmethod]
+    fn builtin(name: &str) -> PyResult<Self> {
+        qsr_core::Calculus::builtin(name)
+            .map(|inner| Self { inner })
+            .map_err(qsr)
+    }
+
+    /// A calculus from a TOML or JSON spec file.
+    #[staticmethod]
+    fn from_spec(path: std::path::PathBuf) -> PyResult<Self> {
+        qsr_core::Calculus::from_path(&path)
+            .map(|inner| Self { inner })
+            .map_err(qsr)
+    }
+
+    /// A calculus from spec text (`format` is "toml" or "json").
+    #[staticmethod]
+    #[pyo3(signature = (text, *, format = "toml"))]
+    fn from_spec_text(text: &str, format: &str) -> PyResult<Self> {
+        let inner = match format {
+            "toml" => qsr_core::Calculus::from_toml_str(text),
+            "json" => qsr_core::Calculus::from_json_str(text),
+            other => {
+                return Err(invalid(format!(
+                    "format must be \"toml\" or \"json\", got {other:?}"
+                )));
+            }
+        };
+        inner.map(|inner| Self { inner }).map_err(qsr)
+    }
+
+    /// Name.
+    #[getter]
+    fn name(&self) -> String {
+        self.inner.name().to_owned()
+    }
+
+    /// Frame kind: "ternary", "binary-oriented" or "extended".
+    #[getter]
+    fn frame(&self) -> &'static str {
+        self.inner.frame().as_str()
+    }
+
+    /// State labels in id order.
+    #[getter]
+    fn labels(&self) -> Vec<String> {
+        self.inner.labels().to_vec()
+    }
+
+    /// Number of states.
+    #[getter]
+    fn n_states(&self) -> usize {
+        self.inner.n_states()
+    }
+
+    /// ln Q, the entropy of a uniform belief.
+    #[getter]
+    fn max_entropy(&self) -> f64 {
+        self.inner.max_entropy()
+    }
+
+    /// State ids of an (n, k) float64 array of configurations (k = 6 ternary
+    /// `ax ay bx by cx cy`, 5 binary `ox oy yaw cx cy`, 10 extended). With `out` (an int64
+    /// array of length n, NumPy style) the ids are written there and nothing is allocated.
+    #[pyo3(signature = (points, *, out = None))]
+    fn classify<'py>(
+        &self,
+        py: Python<'py>,
+        points: PyReadonlyArray2<'py, f64>,
+        out: Option<Bound<'py, PyArray1<i64>>>,
+    ) -> PyResult<Bound<'py, PyArray1<i64>>> {
+        let n = points.as_array().nrows();
+        let k = self.inner.frame().input_len();
+        let (Ok(flat), 6) = (points.as_slice(), k) else {
+            let ids = self.classify_ids(py, &points)?;
+            return match out {
+                None => Ok(ids.into_pyarray(py)),
+                Some(o) => {
+                    o.readwrite()
+                        .as_slice_mut()
+                        .map_err(|e| invalid(e.to_string()))?
+                        .copy_from_slice(&ids);
+                    Ok(o)
+                }
+            };
+        };
+        let target = match out {
+            Some(o) if o.len() == n => o,
+            Some(o) => return Err(invalid(format!("out has length {}, expected {n}", o.len()))),
+            None => PyArray1::<i64>::zeros(py, n, false),
+        };
+        {
+            let mut rw = target.readwrite();
+            let dst = rw
+                .as_slice_mut()
+                .map_err(|e| invalid(format!("out must be contiguous: {e}")))?;
+            let (rows, _) = flat.as_chunks::<6>();
+            let calc = &self.inner;
+            py.detach(|| classify_into(calc, rows, dst)).map_err(qsr)?;
+        }
+        Ok(target)
+    }
+
+    /// Labels of classified configurations (see `classify`).
+    fn classify_labels<'py>(
+        &self,
+        py: Python<'py>,
+        points: PyReadonlyArray2<'py, f64>,
+    ) -> PyResult<Vec<String>> {
+        let ids = self.classify_ids(py, &points)?;
+        Ok(ids
+            .iter()
+            .map(|i| self.inner.labels()[*i as usize].clone())
+            .collect())
+    }
+
+    /// Conceptual neighbours: {"states", "adjacent", "distance"} (distance matrix in state
+    /// order, None for unconnected pairs).
+    fn neighbours<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, pyo3::types::PyDict>> {
+        let g = py.detach(|| self.inner.neighbours().clone());
+        let d = pyo3::types::PyDict::new(py);
+        d.set_item("states", self.inner.labels().to_vec())?;
+        let adjacent: Vec<(String, String)> = g
+            .edges()
+            .iter()
+            .map(|(a, b)| {
+                (
+                    self.inner.label(*a).to_owned(),
+                    self.inner.label(*b).to_owned(),
+                )
+            })
+            .collect();
+        d.set_item("adjacent", adjacent)?;
+        d.set_item("distance", g.distance_matrix().to_vec())?;
+        Ok(d)
+    }
+
+    /// Composition table {r: {s: [t, ...]}} of {AB:C} ∘ {BC:D} → {AB:D}; `generic=True` for
+    /// configurations in general position only.
+    #[pyo3(signature = (*, generic = false))]
+    fn compose(
+        &self,
+        py: Python<'_>,
+        generic: bool,
+    ) -> PyResult<BTreeMap<String, BTreeMap<String, Vec<String>>>> {
+        let table = py
+            .detach(|| {
+                if generic {
+                    self.inner.compose_table_with(&ComposeOptions::generic())
+                } else {
+                    self.inner.compose_table().cloned()
+                }
+            })
+            .map_err(qsr)?;
+        let c = &self.inner;
+        Ok(c.states()
+            .map(|r| {
+                (
+                    c.label(r).to_owned(),
+                    c.states()
+                        .map(|s| (c.label(s).to_owned(), labels(c, table.get(r, s))))
+                        .collect(),
+                )
+            })
+            .collect())
+    }
+
+    /// A permutation table {r: [t, ...]}; `op` is inverse, shortcut, shortcut-inverse,
+    /// homing or homing-inverse.
+    #[pyo3(signature = (op, *, generic = false))]
+    fn permute(
+        &self,
+        py: Python<'_>,
+        op: &str,
+        generic: bool,
+    ) -> PyResult<BTreeMap<String, Vec<String>>> {
+        let op: Permutation = op.parse().map_err(qsr)?;
+        let table = py
+            .detach(|| self.inner.permutation_with(op, !generic))
+            .map_err(qsr)?;
+        let c = &self.inner;
+        Ok(c.states()
+            .map(|r| (c.label(r).to_owned(), labels(c, table.get(r))))
+            .collect())
+    }
+
+    /// For each state of this calculus, the state of `coarse` it merges into (int array).
+    fn merge_map<'py>(
+        &self,
+        py: Python<'py>,
+        coarse: &Calculus,
+    ) -> PyResult<Bound<'py, PyArray1<i64>>> {
+        let m = self.inner.merge_map(&coarse.inner).map_err(qsr)?;
+        Ok(m.as_slice()
+            .iter()
+            .map(|s| i64::from(s.0))
+            .collect::<Vec<_>>()
+            .into_pyarray(py))
+    }
+
+    /// The spec as TOML text.
+    fn spec_toml(&self) -> PyResult<String> {
+        self.inner.spec().to_toml_string().map_err(qsr)
+    }
+
+    /// An SVG picture of the partition.
+    #[pyo3(signature = (*, width = 640))]
+    fn render_svg(&self, width: u32) -> PyResult<String> {
+        qsr_core::render_svg(
+            &self.inner,
+            &qsr_core::RenderOptions {
+                width,
+                ..qsr_core::RenderOptions::default()
+            },
+        )
+        .map_err(qsr)
+    }
+
+    fn __repr__(&self) -> String {
+        format!(
+            "Calculus({:?}, {} states, {})",
+            self.inner.name(),
+            self.inner.n_states(),
+            self.inner.frame().as_str()
+        )
+    }
+}

@@ -1,0 +1,32 @@
+//! # qrm-py — the native module `qrm._qrm` of the `qrm` Python package
+//!
+//! Thin by design: conversion (NumPy arrays in, NumPy arrays and plain Python data out) and
+//! error mapping only; every algorithm lives in `qsr-core` and `pqrm`. The typed public
+//! package (`qrm/__init__.py`, `_qrm.pyi`, `py.typed`) sits in `python/qrm`.
+//!
+//! Errors: each Rust error kind maps to one exception class under `qrm.QrmError` (see
+//! [`errors`]). Long calls release the interpreter (`Python::detach`). A Rust panic inside a
+//! call becomes a Python `PanicException` (pyo3 catches it at the boundary), never a crash.
+#![allow(unsafe_code)] // pyo3's #[pymodule]/#[pyclass]/#[pymethods] expand to unsafe FFI glue; this crate writes none itself.
+
+mod calculus;
+mod errors;
+mod mapping;
+
+use pyo3::prelude::*;
+
+/// The native module. Import `qrm`, not this.
+#[pymodule]
+fn _qrm(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    errors::register(m)?;
+    m.add_class::<calculus::Calculus>()?;
+    m.add_class::<mapping::Pqrm>()?;
+    m.add_function(wrap_pyfunction!(mapping::read_observations, m)?)?;
+    m.add_function(wrap_pyfunction!(mapping::single_observation, m)?)?;
+    m.add_function(wrap_pyfunction!(mapping::monte_carlo_shard, m)?)?;
+    m.add_function(wrap_pyfunction!(mapping::monte_carlo_aggregate, m)?)?;
+    m.add_function(wrap_pyfunction!(mapping::monte_carlo_config, m)?)?;
+    m.add_function(wrap_pyfunction!(calculus::builtin_names, m)?)?;
+    m.add("__version__", env!("CARGO_PKG_VERSION"))?;
+    Ok(())
+}

@@ -1,0 +1,360 @@
+//! `qrm.Pqrm`, observation files and the Monte Carlo study shards: thin wrappers of `pqrm`.
+
+use std::collections::BTreeMap;
+use std::path::PathBuf;
+
+use numpy::{IntoPyArray, PyArray1, PyArray2, PyReadonlyArray1, PyReadonlyArray2};
+use pqrm::loaders::RangeBearingNoise;
+use pqrm::study::{MonteCarloConfig, TrialRecord};
+use pqrm::{GroundTruth, LandmarkId, LandmarkSet, Observation, Orderings, PqrmConfig, Scan};
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+
+use crate::calculus::Calculus;
+use crate::errors::{invalid, pqrm as perr};
+
+fn scan_from_arrays(
+    t: f64,
+    robot: u32,
+    ids: &PyReadonlyArray1<'_, i64>,
+    xy: &PyReadonlyArray2<'_, f64>,
+    cov: &PyReadonlyArray2<'_, f64>,
+) -> PyResult<Scan> {
+    let (ids, xy, cov) = (ids.as_array(), xy.as_array(), cov.as_array());
+    let n = ids.len();
+    if xy.shape() != [n, 2] || cov.shape() != [n, 3] {
+        return Err(invalid(format!(
+            "expected ids (n,), xy (n, 2) and cov (n, 3) = [cxx, cxy, cyy] with one n; got {:?}, {:?}, {:?}",
+            ids.shape(),
+            xy.shape(),
+            cov.shape()
+        )));
+    }
+    let obs = (0..n)
+        .map(|i| {
+            let id = u32::try_from(ids[i]).map_err(|_| {
+                invalid(format!(
+                    "landmark id {} is not a non-negative 32-bit integer",
+                    ids[i]
+                ))
+            })?;
+            Observation::new(
+                LandmarkId(id),
+                [xy[[i, 0]], xy[[i, 1]]],
+                [[cov[[i, 0]], cov[[i, 1]]], [cov[[i, 1]], cov[[i, 2]]]],
+            )
+            .map_err(perr)
+        })
+        .collect::<PyResult<Vec<_>>>()?;
+    Scan::new(t, robot, obs).map_err(perr)
+}
+
+/// Surveyed positions as Python sees them: {landmark: (x, y)}.
+type TruthDict = BTreeMap<u32, (f64, f64)>;
+
+fn truth_from_dict(truth: &BTreeMap<u32, (f64, f64)>) -> GroundTruth {
+    GroundTruth {
+        positions: truth
+            .iter()
+            .map(|(k, (x, y))| (LandmarkId(*k), [*x, *y]))
+            .collect(),
+    }
+}
+
+/// A probabilistic qualitative relational map.
+#[pyclass(module = "qrm")]
+pub(crate) struct Pqrm {
+    inner: pqrm::Pqrm,
+}
+
+#[pymethods]
+impl Pqrm {
+    /// An empty map over `calculus`.
+    #[new]
+    #[pyo3(signature = (calculus, *, samples = 1000, floor = 1.0, orderings = "all", seed = 0))]
+    fn new(
+        calculus: &Calculus,
+        samples: usize,
+        floor: f64,
+        orderings: &str,
+        seed: u64,
+    ) -> PyResult<Self> {
+        let orderings = match orderings {
+            "all" => Orderings::All,
+            "canonical" => Orderings::Canonical,
+            o => {
+                return Err(invalid(format!(
+                    "orderings must be \"all\" or \"canonical\", got {o:?}"
+                )));
+            }
+        };
+        let config = PqrmConfig {
+            samples,
+            floor,
+            orderings,
+            seed,
+        };
+        pqrm::Pqrm::new(calculus.inner.clone(), config)
+            .map(|inner| Self { inner })
+            .map_err(perr)
+    }
+
+    /// One time step: landmark `ids` (n,), positions `xy` (n, 2) and covariances `cov`
+    /// (n, 3) = [cxx, cxy, cyy], in the robot frame. Returns {"observed", "new", "conflicts"}.
+    #[pyo3(signature = (t, ids, xy, cov, *, robot = 0))]
+    fn update<'py>(
+        &mut self,
+        py: Python<'py>,
+        t: f64,
+        ids: PyReadonlyArray1<'py, i64>,
+        xy: PyReadonlyArray2<'py, f64>,
+        cov: PyReadonlyArray2<'py, f64>,
+        robot: u32,
+    ) -> PyResult<Bound<'py, PyDict>> {
+        let scan = scan_from_arrays(t, robot, &ids, &xy, &cov)?;
+        let map = &mut self.inner;
+        let report = py.detach(|| map.update(&scan)).map_err(perr)?;
+        let d = PyDict::new(py);
+        d.set_item("observed", report.observed)?;
+        d.set_item("new", report.new)?;
+        d.set_item("conflicts", report.conflicts)?;
+        Ok(d)
+    }
+
+    /// The belief of the ordered set (a, b, c) as probabilities in state order, or None.
+    fn belief<'py>(
+        &self,
+        py: Python<'py>,
+        set: (u32, u32, u32),
+    ) -> Option<Bound<'py, PyArray1<f64>>> {
+        self.inner
+            .belief(LandmarkSet::new(set.0, set.1, set.2))
+            .map(|p| p.into_pyarray(py))
+    }
+
+    /// Mean entropy over the recorded sets (nats), None for an empty map.
+    fn entropy(&self) -> Option<f64> {
+        self.inner.mean_entropy()
+    }
+
+    /// The recorded ordered sets.
+    fn sets(&self) -> Vec<(u32, u32, u32)> {
+        self.inner.iter().map(|(s, _)| s.ids().into()).collect()
+    }
+
+    /// The calculus.
+    #[getter]
+    fn calculus(&self) -> Calculus {
+        Calculus {
+            inner: self.inner.calculus().clone(),
+        }
+    }
+
+    /// Scores against surveyed positions {landmark: (x, y)}.
+    fn metrics<'py>(
+        &self,
+        py: Python<'py>,
+        truth: BTreeMap<u32, (f64, f64)>,
+    ) -> PyResult<Bound<'py, PyDict>> {
+        let m = pqrm::evaluate(&self.inner, &truth_from_dict(&truth)).map_err(perr)?;
+        let d = PyDict::new(py);
+        d.set_item("n_sets", m.n_sets)?;
+        d.set_item("n_scored", m.n_scored)?;
+        d.set_item("mean_entropy", m.mean_entropy)?;
+        d.set_item("normalized_entropy", m.normalized_entropy)?;
+        d.set_item("error_rate", m.error_rate)?;
+        d.set_item("mean_neighbor_distance", m.mean_neighbor_distance)?;
+        d.set_item("p_ml_mean", m.p_ml_mean)?;
+        d.set_item("top_n_error", m.top_n_error)?;
+        d.set_item("confusion", m.confusion)?;
+        Ok(d)
+    }
+
+    /// Folds another map of the same calculus into this one.
+    fn merge(&mut self, other: &Pqrm) -> PyResult<()> {
+        self.inner.merge(&other.inner).map_err(perr)
+    }
+
+    /// Saves to a JSON file (atomically).
+    fn save(&self, path: PathBuf) -> PyResult<()> {
+        self.inner.save(&path).map_err(perr)
+    }
+
+    /// Loads a saved map.
+    #[staticmethod]
+    fn load(path: PathBuf) -> PyResult<Self> {
+        pqrm::Pqrm::load(&path)
+            .map(|inner| Self { inner })
+            .map_err(perr)
+    }
+
+    /// The map as JSON text.
+    fn to_json(&self) -> PyResult<String> {
+        self.inner.to_json().map_err(perr)
+    }
+
+    fn __len__(&self) -> usize {
+        self.inner.len()
+    }
+
+    fn __repr__(&self) -> String {
+        format!(
+            "Pqrm({:?}, {} sets, {} steps)",
+            self.inner.calculus().name(),
+            self.inner.len(),
+            self.inner.steps()
+        )
+    }
+}
+
+/// Reads an observation file: `format` is "csv", "mrclam" (a directory) or "g2o". Returns
+/// (scans, truth): each scan a dict {"t", "robot", "ids", "xy", "cov"} of NumPy arrays, truth
+/// a dict {landmark: (x, y)} or None.
+#[pyfunction]
+// Literal defaults (pyo3 renders them in the signature); they equal RangeBearingNoise::MRCLAM.
+#[pyo3(signature = (path, format, *, sigma_range = 0.15, sigma_bearing = 0.01))]
+pub(crate) fn read_observations<'py>(
+    py: Python<'py>,
+    path: PathBuf,
+    format: &str,
+    sigma_range: f64,
+    sigma_bearing: f64,
+) -> PyResult<(Vec<Bound<'py, PyDict>>, Option<TruthDict>)> {
+    let data = py
+        .detach(|| match format {
+            "csv" => Ok(pqrm::loaders::read_csv(&path)),
+            "mrclam" => Ok(pqrm::loaders::read_mrclam(
+                &path,
+                RangeBearingNoise {
+                    sigma_range,
+                    sigma_bearing,
+                },
+            )),
+            "g2o" => Ok(pqrm::loaders::read_g2o(&path)),
+            other => Err(other.to_owned()),
+        })
+        .map_err(|f| invalid(format!("format must be csv, mrclam or g2o, got {f:?}")))?
+        .map_err(perr)?;
+    let mut scans = Vec::with_capacity(data.scans.len());
+    for s in &data.scans {
+        let d = PyDict::new(py);
+        d.set_item("t", s.t)?;
+        d.set_item("robot", s.robot)?;
+        d.set_item(
+            "ids",
+            s.observations
+                .iter()
+                .map(|o| i64::from(o.id.0))
+                .collect::<Vec<_>>()
+                .into_pyarray(py),
+        )?;
+        let xy: Vec<Vec<f64>> = s.observations.iter().map(|o| o.mean.to_vec()).collect();
+        let cov: Vec<Vec<f64>> = s
+            .observations
+            .iter()
+            .map(|o| vec![o.cov[0][0], o.cov[0][1], o.cov[1][1]])
+            .collect();
+        d.set_item(
+            "xy",
+            PyArray2::from_vec2(py, &xy).map_err(|e| invalid(e.to_string()))?,
+        )?;
+        d.set_item(
+            "cov",
+            PyArray2::from_vec2(py, &cov).map_err(|e| invalid(e.to_string()))?,
+        )?;
+        scans.push(d);
+    }
+    let truth = data.truth.map(|t| {
+        t.positions
+            .iter()
+            .map(|(k, v)| (k.0, (v[0], v[1])))
+            .collect()
+    });
+    Ok((scans, truth))
+}
+
+/// Single-observation p(R | Z) of three points `points` (3, 2) with covariances `cov`
+/// (3, 3) = [cxx, cxy, cyy] per point (eq. 2.9 without the filter).
+#[pyfunction]
+#[pyo3(signature = (calculus, points, cov, *, samples = 1000, floor = 0.0, seed = 0))]
+pub(crate) fn single_observation<'py>(
+    py: Python<'py>,
+    calculus: &Calculus,
+    points: PyReadonlyArray2<'py, f64>,
+    cov: PyReadonlyArray2<'py, f64>,
+    samples: usize,
+    floor: f64,
+    seed: u64,
+) -> PyResult<Bound<'py, PyArray1<f64>>> {
+    let (p, c) = (points.as_array(), cov.as_array());
+    if p.shape() != [3, 2] || c.shape() != [3, 3] {
+        return Err(invalid(format!(
+            "expected points (3, 2) and cov (3, 3), got {:?} and {:?}",
+            p.shape(),
+            c.shape()
+        )));
+    }
+    let pts = [
+        [p[[0, 0]], p[[0, 1]]],
+        [p[[1, 0]], p[[1, 1]]],
+        [p[[2, 0]], p[[2, 1]]],
+    ];
+    let covs = [0, 1, 2].map(|i| [[c[[i, 0]], c[[i, 1]]], [c[[i, 1]], c[[i, 2]]]]);
+    let calc = &calculus.inner;
+    let probs = py
+        .detach(|| pqrm::study::single_observation(calc, pts, covs, samples, floor, seed))
+        .map_err(perr)?;
+    Ok(probs.into_pyarray(py))
+}
+
+fn config_from_json(config: &str) -> PyResult<MonteCarloConfig> {
+    serde_json::from_str(config).map_err(|e| invalid(format!("study config: {e}")))
+}
+
+/// Runs trials `start..start+count` of the Monte Carlo study described by `config` (JSON);
+/// returns the trial records as JSON. Shards with the same config merge into one run.
+#[pyfunction]
+pub(crate) fn monte_carlo_shard(
+    py: Python<'_>,
+    config: &str,
+    start: usize,
+    count: usize,
+) -> PyResult<String> {
+    let cfg = config_from_json(config)?;
+    let records = py
+        .detach(|| pqrm::study::run_monte_carlo_shard(&cfg, start, count, &|| {}))
+        .map_err(perr)?;
+    serde_json::to_string(&records).map_err(|e| invalid(e.to_string()))
+}
+
+/// Aggregates shards' trial records (JSON texts) into the study result (JSON).
+#[pyfunction]
+pub(crate) fn monte_carlo_aggregate(
+    py: Python<'_>,
+    config: &str,
+    shards: Vec<String>,
+) -> PyResult<String> {
+    let cfg = config_from_json(config)?;
+    let mut records: Vec<TrialRecord> = Vec::new();
+    for s in &shards {
+        let mut r: Vec<TrialRecord> =
+            serde_json::from_str(s).map_err(|e| invalid(format!("shard records: {e}")))?;
+        records.append(&mut r);
+    }
+    let result = py
+        .detach(|| pqrm::study::aggregate_monte_carlo(&cfg, &records))
+        .map_err(perr)?;
+    serde_json::to_string(&result).map_err(|e| invalid(e.to_string()))
+}
+
+/// The default (or quick) Monte Carlo configuration as JSON.
+#[pyfunction]
+#[pyo3(signature = (*, quick = false))]
+pub(crate) fn monte_carlo_config(quick: bool) -> PyResult<String> {
+    let c = if quick {
+        MonteCarloConfig::quick()
+    } else {
+        MonteCarloConfig::default()
+    };
+    serde_json::to_string(&c).map_err(|e| invalid(e.to_string()))
+}

@@ -1,0 +1,48 @@
+"""Every exception class is raised by some bad input; panics never crash the interpreter."""
+import numpy as np
+import pytest
+
+import qrm
+
+
+def test_hierarchy():
+    for cls in [qrm.InvalidInput, qrm.DegenerateFrame, qrm.SpecError, qrm.UnsupportedError, qrm.FormatError, qrm.IoError]:
+        assert issubclass(cls, qrm.QrmError)
+    assert issubclass(qrm.DegenerateFrame, qrm.InvalidInput)
+
+
+def test_each_class_is_raised(tmp_path):
+    edc = qrm.Calculus.builtin("edc")
+    with pytest.raises(qrm.DegenerateFrame):
+        edc.classify(np.array([[1.0, 1.0, 1.0, 1.0, 0.0, 0.0]]))
+    with pytest.raises(qrm.InvalidInput):
+        edc.classify(np.array([[0.0, 0.0, 0.0, 1.0, np.nan, 0.0]]))
+    with pytest.raises(qrm.SpecError):
+        qrm.Calculus.builtin("no-such-calculus")
+    with pytest.raises(qrm.SpecError):
+        qrm.Calculus.from_spec_text('name = "x"\nframe = "ternary"\n')
+    with pytest.raises(qrm.UnsupportedError):
+        qrm.Calculus.builtin("star-4").compose()
+    with pytest.raises(qrm.IoError):
+        qrm.Calculus.from_spec(str(tmp_path / "missing.toml"))
+    bad = tmp_path / "bad.csv"
+    bad.write_text("t,robot,landmark,x,y,cxx,cxy,cyy\n0,0,1,zero,0,1,0,1\n")
+    with pytest.raises(qrm.FormatError):
+        qrm.read_observations(str(bad), "csv")
+    m = qrm.Pqrm(edc, samples=10)
+    with pytest.raises(qrm.InvalidInput):
+        m.update(0.0, np.array([1, 2]), np.zeros((2, 2)), np.array([[1.0, 2.0, 1.0], [1.0, 0.0, 1.0]]))  # not PSD
+    with pytest.raises(qrm.DegenerateFrame):
+        m.update(0.0, np.array([1, 2, 3]), np.array([[0.0, 0.0], [0.0, 0.0], [1.0, 1.0]]), np.zeros((3, 3)))
+    with pytest.raises(qrm.InvalidInput):
+        qrm.Pqrm(edc, samples=0)
+    with pytest.raises(qrm.InvalidInput):
+        qrm.monte_carlo_config(trails=3)
+    with pytest.raises(qrm.FormatError):
+        (tmp_path / "m.json").write_text('{"format": "qrm-pqrm", "version": 99}')
+        qrm.Pqrm.load(str(tmp_path / "m.json"))
+
+
+def test_options_are_keyword_only():
+    with pytest.raises(TypeError):
+        qrm.Pqrm(qrm.Calculus.builtin("edc"), 100)  # samples must be given by name

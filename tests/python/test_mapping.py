@@ -1,0 +1,62 @@
+"""qrm.Pqrm from Python: equal to the Rust CLI's map for the same seed; files; metrics."""
+import json
+import subprocess
+
+import numpy as np
+import pytest
+
+import qrm
+
+
+def write_dataset(d):
+    lm = {1: (0.0, 0.0), 2: (0.3, 4.0), 3: (3.1, 2.6), 4: (-2.2, 1.3), 5: (1.0, -2.0)}
+    lines = ["t,robot,landmark,x,y,cxx,cxy,cyy"]
+    for t in range(6):
+        for i, (x, y) in lm.items():
+            if (i + t) % 5 == 0:
+                continue
+            lines.append(f"{t},0,{i},{x + 0.01 * t},{y - 0.02 * t},0.09,0.01,0.08")
+    (d / "obs.csv").write_text("\n".join(lines) + "\n")
+    (d / "truth.csv").write_text("landmark,x,y\n" + "".join(f"{i},{x},{y}\n" for i, (x, y) in lm.items()))
+    return d / "obs.csv", lm
+
+
+def test_a_pqrm_built_from_python_equals_one_built_by_rust(qrm_bin, tmp_path):
+    obs, truth = write_dataset(tmp_path)
+    out = tmp_path / "rust"
+    subprocess.run([qrm_bin, "map", "--format", "csv", "--input", str(obs), "--calculus", "edc", "--samples", "300", "--seed", "9", "--out", str(out)], check=True, capture_output=True)
+    scans, _ = qrm.read_observations(str(obs), "csv")
+    m = qrm.Pqrm(qrm.Calculus.builtin("edc"), samples=300, seed=9)
+    for s in scans:
+        m.update(s["t"], s["ids"], s["xy"], s["cov"], robot=s["robot"])
+    assert json.loads(m.to_json()) == json.loads((out / "map.json").read_text())
+    met = m.metrics({k: v for k, v in truth.items()})
+    assert met["error_rate"] < 0.3 and len(met["top_n_error"]) == 20
+
+
+def test_update_belief_entropy_save_load(tmp_path):
+    m = qrm.Pqrm(qrm.Calculus.builtin("left-right"), samples=200)
+    r = m.update(0.0, np.array([1, 2, 3]), np.array([[0.0, 0.0], [0.0, 5.0], [-2.0, 2.0]]), np.array([[0.01, 0, 0.01]] * 3))
+    assert r == {"observed": 6, "new": 6, "conflicts": 0}
+    assert m.belief((1, 2, 3))[0] > 0.99
+    assert m.belief((1, 2, 9)) is None
+    assert 0 <= m.entropy() < 0.1 and len(m) == 6
+    p = tmp_path / "map.json"
+    m.save(str(p))
+    back = qrm.Pqrm.load(str(p))
+    assert back.to_json() == m.to_json() and back.sets() == m.sets()
+
+
+def test_mrclam_through_python(mrclam_dir):
+    scans, truth = qrm.read_observations(str(mrclam_dir), "mrclam")
+    assert len(truth) == 15
+    m = qrm.Pqrm(qrm.Calculus.builtin("double-cross"), samples=50)
+    for s in [s for s in scans if len(s["ids"]) >= 3][:150]:
+        m.update(s["t"], s["ids"], s["xy"], s["cov"], robot=s["robot"])
+    assert m.metrics(truth)["error_rate"] < 5 / 6
+
+
+def test_single_observation_matches_phi():
+    lr = qrm.Calculus.builtin("left-right")
+    p = qrm.single_observation(lr, np.array([[0.0, 0.0], [0.0, 10.0], [-1.0, 5.0]]), np.array([[0, 0, 0], [0, 0, 0], [1.0, 0, 1.0]]), samples=40000, seed=1)
+    assert abs(p[0] - 0.8413) < 0.01
