@@ -1,0 +1,355 @@
+//! Seeded scenarios (DESIGN §5) and the loop that drives a robot through them.
+//!
+//! | name | world | path | detector |
+//! |---|---|---|---|
+//! | `pqrm-100` | 10 landmarks uniform in 100 m × 100 m (thesis §2.3.1) | one loop of radius 50 m about the centre, a frame every 16° | range 60 m, Cartesian σ = 5 m |
+//! | `qlink-200` | 200 landmarks uniform in 200 m × 200 m, radius 0.3 m (§4.4.1) | lawn-mower coverage, lanes 20 m apart | range 20 m, σ = 0.3 m, full occlusion |
+//! | `hallway` | two walls of point landmarks 6 m apart, one every 3 m (§3.4.1) | a straight drive down the middle | range 15 m, variance 0.1 m² |
+//! | `field` | a corridor between two long buildings (walls), a dense stand of pines, an open field with sparse posts and ground returns (§4.4.2) | a teleop-like path through all three | range 60 m, σ = 0.7 m |
+
+use rand::{RngExt, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use serde::{Deserialize, Serialize};
+
+use crate::error::{Result, SimError, check};
+use crate::sensors::{
+    Detection, DetectorConfig, DetectorNoise, LaserScan, LidarConfig, Pose, Unicycle,
+};
+use crate::world::{Clutter, PointLandmark, Wall, World, WorldSpec};
+
+/// Scenario names.
+pub const SCENARIOS: [&str; 4] = ["pqrm-100", "qlink-200", "hallway", "field"];
+
+/// A world, a path through it and the robot's sensors.
+#[derive(Debug)]
+pub struct Scenario {
+    /// Name.
+    pub name: String,
+    /// The world.
+    pub world: World,
+    /// Start pose.
+    pub start: Pose,
+    /// Waypoints the robot drives through, in order.
+    pub waypoints: Vec<[f64; 2]>,
+    /// Cruise speed (m/s).
+    pub speed: f64,
+    /// Time between frames (s).
+    pub frame_period: f64,
+    /// The ideal landmark detector.
+    pub detector: DetectorConfig,
+    /// The lidar.
+    pub lidar: LidarConfig,
+}
+
+/// What the robot recorded at one frame.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Frame {
+    /// Simulated time (s).
+    pub t: f64,
+    /// True pose (for logs; the qualitative mapper never uses it).
+    pub pose: Pose,
+    /// Ideal detections (robot frame).
+    pub detections: Vec<Detection>,
+    /// The lidar scan, when asked for.
+    pub scan: Option<LaserScan>,
+}
+
+fn uniform_landmarks(rng: &mut ChaCha8Rng, n: usize, side: f64, radius: f64) -> Vec<PointLandmark> {
+    (0..n)
+        .map(|i| PointLandmark {
+            id: i as u32,
+            pos: [rng.random_range(0.0..side), rng.random_range(0.0..side)],
+            radius,
+        })
+        .collect()
+}
+
+/// Builds a named scenario from a seed; `world` replaces the generated world when given.
+///
+/// # Errors
+/// [`SimError::UnknownScenario`]; world errors.
+pub fn scenario(name: &str, seed: u64, world: Option<WorldSpec>) -> Result<Scenario> {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let lidar = LidarConfig::default();
+    let (spec, start, waypoints, speed, frame_period, detector) = match name {
+        "pqrm-100" => {
+            let spec = WorldSpec {
+                bounds: [0.0, 100.0, 0.0, 100.0],
+                landmarks: uniform_landmarks(&mut rng, 10, 100.0, 0.1),
+                ..WorldSpec::default()
+            };
+            let pts: Vec<[f64; 2]> = (0..=23)
+                .map(|k| (f64::from(k) * 16.0).to_radians())
+                .map(|a| [50.0 + 50.0 * a.cos(), 50.0 + 50.0 * a.sin()])
+                .collect();
+            let step = 2.0 * 50.0 * (8f64.to_radians()).sin(); // chord of 16°
+            let det = DetectorConfig {
+                range: 60.0,
+                full_occlusion: false,
+                noise: DetectorNoise::Cartesian { sigma: 5.0 },
+            };
+            (
+                spec,
+                Pose {
+                    x: 100.0,
+                    y: 50.0,
+                    theta: std::f64::consts::FRAC_PI_2,
+                },
+                pts[1..].to_vec(),
+                2.0,
+                step / 2.0,
+                det,
+            )
+        }
+        "qlink-200" => {
+            let spec = WorldSpec {
+                bounds: [0.0, 200.0, 0.0, 200.0],
+                landmarks: uniform_landmarks(&mut rng, 200, 200.0, 0.3),
+                ..WorldSpec::default()
+            };
+            let mut pts = Vec::new();
+            for (i, x) in (0..=10).map(|k| 10.0 + 18.0 * f64::from(k)).enumerate() {
+                let (a, b) = if i % 2 == 0 {
+                    (5.0, 195.0)
+                } else {
+                    (195.0, 5.0)
+                };
+                pts.push([x, a]);
+                pts.push([x, b]);
+            }
+            let det = DetectorConfig {
+                range: 20.0,
+                full_occlusion: true,
+                noise: DetectorNoise::Cartesian { sigma: 0.3 },
+            };
+            (
+                spec,
+                Pose {
+                    x: 10.0,
+                    y: 0.0,
+                    theta: std::f64::consts::FRAC_PI_2,
+                },
+                pts,
+                2.0,
+                2.0,
+                det,
+            )
+        }
+        "hallway" => {
+            let mut landmarks = Vec::new();
+            for k in 0..20 {
+                let x = 3.0 * f64::from(k);
+                landmarks.push(PointLandmark {
+                    id: 2 * k as u32,
+                    pos: [x, 3.0],
+                    radius: 0.1,
+                });
+                landmarks.push(PointLandmark {
+                    id: 2 * k as u32 + 1,
+                    pos: [x + 1.5, -3.0],
+                    radius: 0.1,
+                });
+            }
+            let spec = WorldSpec {
+                bounds: [-5.0, 65.0, -6.0, 6.0],
+                landmarks,
+                ..WorldSpec::default()
+            };
+            let det = DetectorConfig {
+                range: 15.0,
+                full_occlusion: false,
+                noise: DetectorNoise::Cartesian {
+                    sigma: 0.1f64.sqrt(),
+                },
+            };
+            (
+                spec,
+                Pose {
+                    x: -3.0,
+                    y: 0.0,
+                    theta: 0.0,
+                },
+                vec![[62.0, 0.0]],
+                1.0,
+                1.0,
+                det,
+            )
+        }
+        "field" => {
+            let mut landmarks = Vec::new();
+            let mut clutter = Vec::new();
+            let mut id = 0u32;
+            // Dense pines north of the corridor's end.
+            for _ in 0..45 {
+                landmarks.push(PointLandmark {
+                    id,
+                    pos: [rng.random_range(45.0..80.0), rng.random_range(20.0..45.0)],
+                    radius: rng.random_range(0.15..0.3),
+                });
+                id += 1;
+            }
+            // Sparse posts in the open field to the east.
+            for _ in 0..8 {
+                landmarks.push(PointLandmark {
+                    id,
+                    pos: [rng.random_range(90.0..150.0), rng.random_range(-30.0..30.0)],
+                    radius: 0.2,
+                });
+                id += 1;
+            }
+            // Uneven ground: returns that are not landmarks.
+            for _ in 0..25 {
+                clutter.push(Clutter {
+                    pos: [rng.random_range(90.0..150.0), rng.random_range(-30.0..30.0)],
+                    radius: rng.random_range(0.3..1.0),
+                });
+            }
+            // Remove pines overlapping each other (the detector assumes disjoint discs).
+            let mut kept: Vec<PointLandmark> = Vec::new();
+            for l in landmarks {
+                if kept.iter().all(|k| {
+                    (k.pos[0] - l.pos[0]).hypot(k.pos[1] - l.pos[1]) > k.radius + l.radius + 0.5
+                }) {
+                    kept.push(l);
+                }
+            }
+            let walls = vec![
+                Wall {
+                    id: 1000,
+                    start: [0.0, -7.5],
+                    end: [40.0, -7.5],
+                },
+                Wall {
+                    id: 1001,
+                    start: [0.0, 7.5],
+                    end: [40.0, 7.5],
+                },
+            ];
+            let spec = WorldSpec {
+                bounds: [-20.0, 160.0, -40.0, 50.0],
+                landmarks: kept,
+                walls,
+                clutter,
+            };
+            let det = DetectorConfig {
+                range: 60.0,
+                full_occlusion: true,
+                noise: DetectorNoise::Cartesian { sigma: 0.7 },
+            };
+            let path = vec![
+                [40.0, 0.0],
+                [60.0, 10.0],
+                [85.0, 30.0],
+                [110.0, 10.0],
+                [140.0, -15.0],
+                [120.0, -25.0],
+            ];
+            (
+                spec,
+                Pose {
+                    x: -10.0,
+                    y: 0.0,
+                    theta: 0.0,
+                },
+                path,
+                1.5,
+                1.0,
+                det,
+            )
+        }
+        other => return Err(SimError::UnknownScenario(other.to_owned())),
+    };
+    let spec = world.unwrap_or(spec);
+    Ok(Scenario {
+        name: name.to_owned(),
+        world: World::new(spec)?,
+        start,
+        waypoints,
+        speed,
+        frame_period,
+        detector,
+        lidar,
+    })
+}
+
+impl Scenario {
+    /// Drives the path with a unicycle (pure pursuit, 0.05 s steps) and records a frame every
+    /// `frame_period`: detections always, a lidar scan when `lidar` is set. Sensor noise is
+    /// drawn from a generator seeded by `seed`.
+    ///
+    /// # Errors
+    /// Sensor configuration errors.
+    pub fn run(&self, seed: u64, lidar: bool) -> Result<Vec<Frame>> {
+        check(self.speed > 0.0 && self.frame_period > 0.0, || {
+            "speed and frame period must be > 0".into()
+        })?;
+        let mut rng = ChaCha8Rng::seed_from_u64(seed ^ 0x5e45_0a11);
+        let dt = 0.05;
+        let mut robot = Unicycle::new(self.start, self.speed, 1.5, dt)?;
+        let mut frames = Vec::new();
+        let mut t = 0.0;
+        let mut next_frame = 0.0;
+        let per_frame = (self.frame_period / dt).round().max(1.0) as u64;
+        let mut step: u64 = 0;
+        let max_steps = 200_000;
+        for wp in &self.waypoints {
+            loop {
+                if step % per_frame == 0 {
+                    let _ = next_frame;
+                    next_frame = t + self.frame_period;
+                    let detections = self.world.detect(&robot.pose, &self.detector, &mut rng)?;
+                    let scan = if lidar {
+                        Some(self.world.lidar(&robot.pose, &self.lidar, &mut rng)?)
+                    } else {
+                        None
+                    };
+                    frames.push(Frame {
+                        t,
+                        pose: robot.pose,
+                        detections,
+                        scan,
+                    });
+                }
+                let (dx, dy) = (wp[0] - robot.pose.x, wp[1] - robot.pose.y);
+                let dist = dx.hypot(dy);
+                if dist < 0.5 || step >= max_steps {
+                    break;
+                }
+                let err = (dy.atan2(dx) - robot.pose.theta + std::f64::consts::PI)
+                    .rem_euclid(std::f64::consts::TAU)
+                    - std::f64::consts::PI;
+                let v = if err.abs() > 1.2 {
+                    0.2 * self.speed
+                } else {
+                    self.speed.min(dist / dt)
+                };
+                robot.step(v, 2.5 * err);
+                t += dt;
+                step += 1;
+            }
+        }
+        Ok(frames)
+    }
+}
+
+/// Writes frames' detections as the observation CSV the mapper reads
+/// (`t,robot,landmark,x,y,cxx,cxy,cyy`, robot frame).
+///
+/// # Errors
+/// I/O errors of the writer.
+pub fn write_observations_csv(
+    frames: &[Frame],
+    out: &mut impl std::io::Write,
+) -> std::io::Result<()> {
+    writeln!(out, "t,robot,landmark,x,y,cxx,cxy,cyy")?;
+    for f in frames {
+        for d in &f.detections {
+            writeln!(
+                out,
+                "{},0,{},{},{},{},{},{}",
+                f.t, d.id, d.xy[0], d.xy[1], d.cov[0][0], d.cov[0][1], d.cov[1][1]
+            )?;
+        }
+    }
+    Ok(())
+}
