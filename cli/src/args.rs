@@ -25,6 +25,8 @@ pub enum Command {
     Pqrm(PqrmCmd),
     /// Build a PQRM from an observation file and score it against ground truth.
     Map(MapArgs),
+    /// Run a simulated scenario: MCAP log, observation CSV, world file, picture.
+    Sim(crate::sim_cmd::SimArgs),
 }
 
 /// `qrm pqrm ...`.

@@ -8,10 +8,12 @@
 
 mod args;
 mod calculus_cmd;
+mod mcap_log;
 mod output;
 mod plot;
 mod pqrm_cmd;
 mod progress;
+mod sim_cmd;
 
 use std::process::ExitCode;
 
@@ -23,6 +25,7 @@ fn main() -> ExitCode {
         args::Command::Calculus(cmd) => calculus_cmd::run(cmd),
         args::Command::Pqrm(cmd) => pqrm_cmd::run(cmd),
         args::Command::Map(a) => pqrm_cmd::map(a),
+        args::Command::Sim(a) => sim_cmd::run(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

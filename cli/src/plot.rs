@@ -411,3 +411,93 @@ pub fn histogram(
         |r| draw_hist(r, title, x_label, edges, groups),
     )
 }
+
+fn draw_scenario<DB: DrawingBackend>(
+    root: &DrawingArea<DB, Shift>,
+    title: &str,
+    w: &sim2d::WorldSpec,
+    traj: &[(f64, f64)],
+    rays: &[((f64, f64), (f64, f64))],
+) -> Drawn
+where
+    DB::ErrorType: 'static,
+{
+    root.fill(&WHITE)?;
+    let [x0, x1, y0, y1] = w.bounds;
+    // Equal scales on both axes.
+    let (dx, dy) = (x1 - x0, y1 - y0);
+    let aspect = f64::from(SIZE.0 - 60) / f64::from(SIZE.1 - 60);
+    let (cx, cy) = ((x0 + x1) / 2.0, (y0 + y1) / 2.0);
+    let (hx, hy) = if dx / dy > aspect {
+        (dx / 2.0, dx / aspect / 2.0)
+    } else {
+        (dy * aspect / 2.0, dy / 2.0)
+    };
+    let mut chart = ChartBuilder::on(root)
+        .margin(12)
+        .caption(title, ("sans-serif", 20))
+        .x_label_area_size(30)
+        .y_label_area_size(40)
+        .build_cartesian_2d((cx - hx)..(cx + hx), (cy - hy)..(cy + hy))?;
+    chart
+        .configure_mesh()
+        .x_desc("x (m)")
+        .y_desc("y (m)")
+        .light_line_style(WHITE)
+        .draw()?;
+    let px_per_m = f64::from(SIZE.0 - 60) / (2.0 * hx);
+    let disc = |r: f64| ((r * px_per_m).round() as i32).max(2);
+    chart.draw_series(rays.iter().map(|(a, b)| {
+        PathElement::new(
+            vec![*a, *b],
+            RGBColor(255, 170, 60).mix(0.35).stroke_width(1),
+        )
+    }))?;
+    chart.draw_series(w.clutter.iter().map(|c| {
+        Circle::new(
+            (c.pos[0], c.pos[1]),
+            disc(c.radius),
+            RGBColor(160, 130, 100).mix(0.6).filled(),
+        )
+    }))?;
+    chart.draw_series(w.walls.iter().map(|l| {
+        PathElement::new(
+            vec![(l.start[0], l.start[1]), (l.end[0], l.end[1])],
+            RGBColor(90, 90, 90).stroke_width(4),
+        )
+    }))?;
+    chart.draw_series(w.landmarks.iter().map(|l| {
+        Circle::new(
+            (l.pos[0], l.pos[1]),
+            disc(l.radius),
+            RGBColor(30, 130, 60).filled(),
+        )
+    }))?;
+    chart.draw_series(std::iter::once(PathElement::new(
+        traj.to_vec(),
+        RGBColor(31, 119, 180).stroke_width(2),
+    )))?;
+    if let Some(&(x, y)) = traj.first() {
+        chart.draw_series(std::iter::once(Circle::new(
+            (x, y),
+            5,
+            RGBColor(31, 119, 180).filled(),
+        )))?;
+    }
+    Ok(())
+}
+
+/// A scenario's world, the robot's true trajectory and some detection rays.
+pub fn scenario_map(
+    stem: &Path,
+    title: &str,
+    world: &sim2d::WorldSpec,
+    traj: &[(f64, f64)],
+    rays: &[((f64, f64), (f64, f64))],
+) -> Result<Vec<PathBuf>> {
+    both(
+        stem,
+        |r| draw_scenario(r, title, world, traj, rays),
+        |r| draw_scenario(r, title, world, traj, rays),
+    )
+}

@@ -294,7 +294,7 @@ impl Scenario {
         let max_steps = 200_000;
         for wp in &self.waypoints {
             loop {
-                if step % per_frame == 0 {
+                if step.is_multiple_of(per_frame) {
                     let _ = next_frame;
                     next_frame = t + self.frame_period;
                     let detections = self.world.detect(&robot.pose, &self.detector, &mut rng)?;

@@ -1,0 +1,184 @@
+//! `qrm sim`: run a sim2d scenario, write `run.mcap`, `observations.csv` (the mapper's input),
+//! `truth.csv` (surveyed landmark positions), `world.toml` and a picture of the run.
+
+use std::path::PathBuf;
+
+use anyhow::{Context, Result, bail};
+use serde_json::json;
+
+use crate::mcap_log::{McapLog, stamp, yaw};
+use crate::output::write_atomic;
+
+/// Raw flags of `qrm sim`.
+#[derive(Debug, clap::Args)]
+pub struct SimArgs {
+    /// Scenario: pqrm-100, qlink-200, hallway or field.
+    #[arg(long)]
+    pub scenario: String,
+    /// A TOML world file replacing the scenario's generated world.
+    #[arg(long)]
+    pub world: Option<PathBuf>,
+    /// Seed of the world generator and the sensor noise.
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    /// Skip the lidar (detections only; much smaller logs).
+    #[arg(long)]
+    pub no_lidar: bool,
+    /// Output directory.
+    #[arg(long)]
+    pub out: PathBuf,
+}
+
+/// Runs `qrm sim`.
+pub fn run(a: SimArgs) -> Result<()> {
+    if !sim2d::SCENARIOS.contains(&a.scenario.as_str()) {
+        bail!(
+            "unknown scenario `{}` ({})",
+            a.scenario,
+            sim2d::SCENARIOS.join(", ")
+        );
+    }
+    let world = match &a.world {
+        Some(p) => {
+            let text =
+                std::fs::read_to_string(p).with_context(|| format!("reading {}", p.display()))?;
+            let spec: sim2d::WorldSpec = toml::from_str(&text)
+                .with_context(|| format!("parsing world file {}", p.display()))?;
+            Some(spec)
+        }
+        None => None,
+    };
+    let sc = sim2d::scenario(&a.scenario, a.seed, world)?;
+    let pb = crate::progress::bar(1, &format!("simulating {}", a.scenario));
+    let frames = sc.run(a.seed, !a.no_lidar)?;
+    pb.finish_and_clear();
+    std::fs::create_dir_all(&a.out).with_context(|| format!("creating {}", a.out.display()))?;
+    let mut csv = Vec::new();
+    sim2d::write_observations_csv(&frames, &mut csv)?;
+    write_atomic(&a.out.join("observations.csv"), &csv)?;
+    write_atomic(
+        &a.out.join("world.toml"),
+        toml::to_string(sc.world.spec())?.as_bytes(),
+    )?;
+    let mut truth = String::from("landmark,x,y\n");
+    for l in &sc.world.spec().landmarks {
+        truth.push_str(&format!("{},{},{}\n", l.id, l.pos[0], l.pos[1]));
+    }
+    write_atomic(&a.out.join("truth.csv"), truth.as_bytes())?;
+    write_log(&a.out.join("run.mcap"), &sc, &frames)?;
+    let traj: Vec<(f64, f64)> = frames.iter().map(|f| (f.pose.x, f.pose.y)).collect();
+    let rays: Vec<((f64, f64), (f64, f64))> = frames
+        .iter()
+        .step_by((frames.len() / 12).max(1))
+        .flat_map(|f| {
+            let (s, c) = f.pose.theta.sin_cos();
+            f.detections.iter().map(move |d| {
+                (
+                    (f.pose.x, f.pose.y),
+                    (
+                        f.pose.x + c * d.xy[0] - s * d.xy[1],
+                        f.pose.y + s * d.xy[0] + c * d.xy[1],
+                    ),
+                )
+            })
+        })
+        .collect();
+    crate::plot::scenario_map(
+        &a.out.join("scenario"),
+        &format!("{} (seed {})", a.scenario, a.seed),
+        sc.world.spec(),
+        &traj,
+        &rays,
+    )?;
+    let detections: usize = frames.iter().map(|f| f.detections.len()).sum();
+    println!(
+        "{}: {} frames, {} detections, {} landmarks, {} walls; wrote {}",
+        a.scenario,
+        frames.len(),
+        detections,
+        sc.world.spec().landmarks.len(),
+        sc.world.spec().walls.len(),
+        a.out.display()
+    );
+    Ok(())
+}
+
+fn write_log(path: &std::path::Path, sc: &sim2d::Scenario, frames: &[sim2d::Frame]) -> Result<()> {
+    let mut log = McapLog::create(path)?;
+    let spec = sc.world.spec();
+    let mut entities = Vec::new();
+    for l in &spec.landmarks {
+        entities.push(json!({
+            "timestamp": stamp(0.0), "frame_id": "world", "id": format!("landmark-{}", l.id), "lifetime": stamp(0.0), "frame_locked": false,
+            "cylinders": [{"pose": {"position": {"x": l.pos[0], "y": l.pos[1], "z": 0.5}, "orientation": yaw(0.0)},
+                           "size": {"x": 2.0 * l.radius, "y": 2.0 * l.radius, "z": 1.0}, "bottom_scale": 1.0, "top_scale": 1.0,
+                           "color": {"r": 0.1, "g": 0.5, "b": 0.2, "a": 1.0}}],
+            "texts": [{"pose": {"position": {"x": l.pos[0], "y": l.pos[1], "z": 1.2}, "orientation": yaw(0.0)}, "billboard": true,
+                       "font_size": 12.0, "scale_invariant": true, "color": {"r": 1.0, "g": 1.0, "b": 1.0, "a": 1.0}, "text": l.id.to_string()}],
+            "lines": []
+        }));
+    }
+    for w in &spec.walls {
+        entities.push(json!({
+            "timestamp": stamp(0.0), "frame_id": "world", "id": format!("wall-{}", w.id), "lifetime": stamp(0.0), "frame_locked": false,
+            "cylinders": [], "texts": [],
+            "lines": [{"type": 0, "pose": {"position": {"x": 0.0, "y": 0.0, "z": 0.0}, "orientation": yaw(0.0)}, "thickness": 0.3, "scale_invariant": false,
+                       "points": [{"x": w.start[0], "y": w.start[1], "z": 0.5}, {"x": w.end[0], "y": w.end[1], "z": 0.5}],
+                       "color": {"r": 0.6, "g": 0.6, "b": 0.6, "a": 1.0}}]
+        }));
+    }
+    for (i, c) in spec.clutter.iter().enumerate() {
+        entities.push(json!({
+            "timestamp": stamp(0.0), "frame_id": "world", "id": format!("clutter-{i}"), "lifetime": stamp(0.0), "frame_locked": false,
+            "cylinders": [{"pose": {"position": {"x": c.pos[0], "y": c.pos[1], "z": 0.2}, "orientation": yaw(0.0)},
+                           "size": {"x": 2.0 * c.radius, "y": 2.0 * c.radius, "z": 0.4}, "bottom_scale": 1.0, "top_scale": 1.0,
+                           "color": {"r": 0.5, "g": 0.4, "b": 0.3, "a": 0.7}}],
+            "texts": [], "lines": []
+        }));
+    }
+    log.write(
+        "/world",
+        0.0,
+        &json!({"deletions": [], "entities": entities}),
+    )?;
+    log.write("/log", 0.0, &json!({"timestamp": stamp(0.0), "level": 2, "message": format!("scenario {} started", sc.name), "name": "qrm sim", "file": "", "line": 0}))?;
+    for f in frames {
+        log.write(
+            "/tf",
+            f.t,
+            &json!({"timestamp": stamp(f.t), "parent_frame_id": "world", "child_frame_id": "base_link",
+                    "translation": {"x": f.pose.x, "y": f.pose.y, "z": 0.0}, "rotation": yaw(f.pose.theta)}),
+        )?;
+        let dets: Vec<_> = f.detections.iter().map(|d| json!({"id": d.id, "x": d.xy[0], "y": d.xy[1], "cov": [d.cov[0][0], d.cov[0][1], d.cov[1][1]]})).collect();
+        log.write(
+            "/detections",
+            f.t,
+            &json!({"timestamp": stamp(f.t), "frame_id": "base_link", "detections": dets}),
+        )?;
+        if let Some(scan) = &f.scan {
+            // JSON has no infinity: no return is reported as max range + 1, outside
+            // [range_min, range_max] as Foxglove expects.
+            let ranges: Vec<f64> = scan
+                .ranges
+                .iter()
+                .map(|r| {
+                    if r.is_finite() {
+                        *r
+                    } else {
+                        sc.lidar.max_range + 1.0
+                    }
+                })
+                .collect();
+            log.write(
+                "/scan",
+                f.t,
+                &json!({"timestamp": stamp(f.t), "frame_id": "base_link", "pose": {"position": {"x": 0.0, "y": 0.0, "z": 0.0}, "orientation": yaw(0.0)},
+                        "start_angle": scan.angles.first().copied().unwrap_or(0.0), "end_angle": scan.angles.last().copied().unwrap_or(0.0),
+                        "ranges": ranges, "intensities": []}),
+            )?;
+        }
+    }
+    let t_end = frames.last().map_or(0.0, |f| f.t);
+    log.write("/log", t_end, &json!({"timestamp": stamp(t_end), "level": 2, "message": format!("{} frames", frames.len()), "name": "qrm sim", "file": "", "line": 0}))?;
+    log.finish()
+}

@@ -1,0 +1,31 @@
+"""Logs of `qrm sim` read back by the `mcap` Python package (the second, independent reader)."""
+import json
+import subprocess
+
+import pytest
+from mcap.reader import make_reader
+
+
+@pytest.mark.parametrize("scenario", ["hallway", "field", "pqrm-100"])
+def test_sim_logs_read_back_with_the_mcap_package(qrm_bin, tmp_path, scenario):
+    subprocess.run([qrm_bin, "sim", "--scenario", scenario, "--seed", "2", "--out", str(tmp_path)], check=True, capture_output=True)
+    with open(tmp_path / "run.mcap", "rb") as f:
+        reader = make_reader(f)
+        summary = reader.get_summary()
+        schemas = {s.name for s in summary.schemas.values()}
+        assert {"foxglove.LaserScan", "foxglove.SceneUpdate", "foxglove.FrameTransform", "foxglove.Log", "qrm.LandmarkDetections"} <= schemas
+        counts = {}
+        last = -1
+        for schema, channel, message in reader.iter_messages(log_time_order=True):
+            body = json.loads(message.data)
+            counts[channel.topic] = counts.get(channel.topic, 0) + 1
+            assert message.log_time >= last
+            last = message.log_time
+            if channel.topic == "/scan":
+                assert len(body["ranges"]) == 1081
+            if channel.topic == "/detections":
+                assert all(len(d["cov"]) == 3 for d in body["detections"])
+        assert sum(counts.values()) == summary.statistics.message_count
+    frames = counts["/tf"]
+    assert counts["/scan"] == frames == counts["/detections"]
+    assert counts["/world"] == 1
