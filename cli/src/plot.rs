@@ -50,6 +50,9 @@ impl Series {
 
 type Drawn = std::result::Result<(), Box<dyn std::error::Error>>;
 
+/// A line segment `(from, to)` in data coordinates.
+pub type Segment = ((f64, f64), (f64, f64));
+
 const SIZE: (u32, u32) = (760, 520);
 
 fn colour(i: usize) -> RGBColor {
@@ -417,7 +420,7 @@ fn draw_scenario<DB: DrawingBackend>(
     title: &str,
     w: &sim2d::WorldSpec,
     traj: &[(f64, f64)],
-    rays: &[((f64, f64), (f64, f64))],
+    rays: &[Segment],
 ) -> Drawn
 where
     DB::ErrorType: 'static,
@@ -493,7 +496,7 @@ pub fn scenario_map(
     title: &str,
     world: &sim2d::WorldSpec,
     traj: &[(f64, f64)],
-    rays: &[((f64, f64), (f64, f64))],
+    rays: &[Segment],
 ) -> Result<Vec<PathBuf>> {
     both(
         stem,

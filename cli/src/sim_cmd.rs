@@ -67,7 +67,7 @@ pub fn run(a: SimArgs) -> Result<()> {
     write_atomic(&a.out.join("truth.csv"), truth.as_bytes())?;
     write_log(&a.out.join("run.mcap"), &sc, &frames)?;
     let traj: Vec<(f64, f64)> = frames.iter().map(|f| (f.pose.x, f.pose.y)).collect();
-    let rays: Vec<((f64, f64), (f64, f64))> = frames
+    let rays: Vec<crate::plot::Segment> = frames
         .iter()
         .step_by((frames.len() / 12).max(1))
         .flat_map(|f| {
