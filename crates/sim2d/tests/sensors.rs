@@ -78,7 +78,7 @@ fn lidar_ranges_equal_analytic_intersections() {
         let pose = Pose {
             x: 0.0,
             y: 0.0,
-            theta: rng.random_range(0.0..6.28),
+            theta: rng.random_range(0.0..std::f64::consts::TAU),
         };
         let cfg = LidarConfig {
             fov: std::f64::consts::TAU,
