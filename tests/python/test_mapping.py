@@ -60,3 +60,18 @@ def test_single_observation_matches_phi():
     lr = qrm.Calculus.builtin("left-right")
     p = qrm.single_observation(lr, np.array([[0.0, 0.0], [0.0, 10.0], [-1.0, 5.0]]), np.array([[0, 0, 0], [0, 0, 0], [1.0, 0, 1.0]]), samples=40000, seed=1)
     assert abs(p[0] - 0.8413) < 0.01
+
+
+def test_sim_run_feeds_the_mapper():
+    frames = qrm.sim.run("hallway", 4)
+    again = qrm.sim.run("hallway", 4)
+    assert all(np.array_equal(a["xy"], b["xy"]) for a, b in zip(frames, again))
+    m = qrm.Pqrm(qrm.Calculus.builtin("left-right"), samples=100)
+    for f in frames:
+        if len(f["ids"]) >= 3:
+            m.update(f["t"], f["ids"], f["xy"], f["cov"])
+    assert len(m) > 100
+    with_scan = qrm.sim.run("hallway", 4, lidar=True)
+    assert with_scan[0]["ranges"].shape == (1081,)
+    with pytest.raises(qrm.SpecError):
+        qrm.sim.run("moon", 1)

@@ -12,6 +12,7 @@
 mod calculus;
 mod errors;
 mod mapping;
+mod simulation;
 
 use pyo3::prelude::*;
 
@@ -27,6 +28,7 @@ fn _qrm(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(mapping::monte_carlo_aggregate, m)?)?;
     m.add_function(wrap_pyfunction!(mapping::monte_carlo_config, m)?)?;
     m.add_function(wrap_pyfunction!(calculus::builtin_names, m)?)?;
+    m.add_function(wrap_pyfunction!(simulation::simulate, m)?)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())
 }

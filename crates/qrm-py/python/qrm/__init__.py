@@ -26,7 +26,7 @@ from ._qrm import (
     read_observations,
     single_observation,
 )
-from . import _qrm
+from . import _qrm, sim
 
 __all__ = [
     "Calculus",
@@ -45,6 +45,7 @@ __all__ = [
     "monte_carlo_config",
     "monte_carlo_shard",
     "read_observations",
+    "sim",
     "single_observation",
 ]
 
