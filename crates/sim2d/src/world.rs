@@ -59,7 +59,7 @@ pub struct WorldSpec {
 }
 
 /// What a ray or a query hit.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
 pub enum Hit {
     /// The i-th point landmark.
     Landmark(usize),

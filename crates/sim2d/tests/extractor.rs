@@ -1,0 +1,120 @@
+//! The lidar landmark extractor and triangle recognition against the simulator's truth.
+#![allow(clippy::unwrap_used)] // tests: a panic is the failure report
+
+use sim2d::{
+    CandidateKind, ExtractorConfig, Hit, LidarConfig, TriangleRecognizer, extract, scenario,
+};
+
+#[test]
+fn extractor_finds_landmarks_and_recognition_is_precise() {
+    let mut sc = scenario("field", 2, None).unwrap();
+    sc.lidar = LidarConfig {
+        range_sigma: 0.01,
+        ..LidarConfig::default()
+    };
+    let frames = sc.run(2, true).unwrap();
+    let cfg = ExtractorConfig::default();
+    let spec = sc.world.spec().clone();
+    let (mut cands, mut landmark_cands, mut clutter_cands, mut fit_err, mut centroid_err) =
+        (0usize, 0usize, 0usize, 0.0, 0.0);
+    let mut recognizer = TriangleRecognizer::new(0.3);
+    let mut id_truth: std::collections::BTreeMap<u32, usize> = Default::default();
+    let (mut recognised, mut correct, mut seen_before, mut recalled) =
+        (0usize, 0usize, 0usize, 0usize);
+    let mut ever_seen = std::collections::BTreeSet::new();
+    for f in &frames {
+        let scan = f.scan.as_ref().unwrap();
+        let points: Vec<_> = extract(scan, &cfg)
+            .into_iter()
+            .filter(|c| c.kind == CandidateKind::Point)
+            .collect();
+        cands += points.len();
+        let mut positions = Vec::new();
+        let mut truths = Vec::new();
+        for c in &points {
+            if let Some(Hit::Landmark(i)) = c.truth {
+                landmark_cands += 1;
+                let t = f.pose.to_local(spec.landmarks[i].pos);
+                fit_err += (c.centre[0] - t[0]).hypot(c.centre[1] - t[1]);
+                centroid_err += (c.centroid[0] - t[0]).hypot(c.centroid[1] - t[1]);
+            }
+            if let Some(Hit::Clutter(_)) = c.truth {
+                clutter_cands += 1;
+            }
+            positions.push(c.centre);
+            truths.push(match c.truth {
+                Some(Hit::Landmark(i)) => Some(i),
+                _ => None,
+            });
+        }
+        let ids = recognizer.recognise(&positions);
+        for (id, truth) in ids.iter().zip(&truths) {
+            let Some(t) = truth else { continue };
+            let known_id = id_truth.contains_key(id);
+            if ever_seen.contains(t) {
+                seen_before += 1;
+            }
+            if known_id {
+                recognised += 1;
+                if id_truth[id] == *t {
+                    correct += 1;
+                    if ever_seen.contains(t) {
+                        recalled += 1;
+                    }
+                }
+            } else {
+                id_truth.insert(*id, *t);
+            }
+            ever_seen.insert(*t);
+        }
+    }
+    // Ground returns (clutter) look like trunks to a lidar: the thesis's false landmarks. The
+    // extractor must not make landmarks out of anything else (walls, empty space).
+    let precision = landmark_cands as f64 / (cands - clutter_cands) as f64;
+    eprintln!("{clutter_cands} candidates are ground returns (clutter)");
+    let (fit, centroid) = (
+        fit_err / landmark_cands as f64,
+        centroid_err / landmark_cands as f64,
+    );
+    let rec_precision = correct as f64 / recognised.max(1) as f64;
+    let rec_recall = recalled as f64 / seen_before.max(1) as f64;
+    eprintln!(
+        "extraction: {cands} point candidates, {:.1}% landmarks; centre error: fit {fit:.3} m, centroid {centroid:.3} m; \
+         recognition: precision {:.1}% ({correct}/{recognised}), recall {:.1}% ({recalled}/{seen_before})",
+        100.0 * precision,
+        100.0 * rec_precision,
+        100.0 * rec_recall
+    );
+    assert!(cands > 100, "the field has plenty of trunks in range");
+    assert!(
+        precision > 0.9,
+        "apart from ground returns, point candidates are landmarks"
+    );
+    assert!(
+        fit < centroid,
+        "the circle fit removes the centroid's bias towards the sensor"
+    );
+    assert!(rec_precision > 0.9, "recognition rarely confuses landmarks");
+    assert!(
+        rec_recall > 0.5,
+        "most re-observed landmarks are recognised"
+    );
+}
+
+#[test]
+fn walls_are_extracted_as_walls() {
+    let mut sc = scenario("field", 1, None).unwrap();
+    sc.lidar = LidarConfig::default();
+    let frames = sc.run(1, true).unwrap();
+    // Inside the corridor (x < 40) the two buildings are long straight clusters.
+    let f = frames
+        .iter()
+        .find(|f| f.pose.x > 10.0 && f.pose.x < 30.0)
+        .unwrap();
+    let walls: Vec<_> = extract(f.scan.as_ref().unwrap(), &ExtractorConfig::default())
+        .into_iter()
+        .filter(|c| c.kind == CandidateKind::Wall)
+        .collect();
+    assert!(walls.len() >= 2, "{walls:?}");
+    assert!(walls.iter().all(|w| matches!(w.truth, Some(Hit::Wall(_)))));
+}
