@@ -348,3 +348,23 @@ fn runs_are_reproducible_from_the_seed() {
         assert!(a.len() > 200, "{name} produced observations");
     }
 }
+
+#[test]
+fn observations_are_byte_identical_for_one_and_two_threads() {
+    // sim2d runs single-threaded today; this pins that a run inside a 1- or 2-thread rayon
+    // pool (as the studies run it) gives the same bytes, should parallelism ever be added.
+    let csv = |threads: usize| {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap()
+            .install(|| {
+                let sc = sim2d::scenario("qlink-200", 9, None).unwrap();
+                let frames = sc.run(9, false).unwrap();
+                let mut out = Vec::new();
+                sim2d::write_observations_csv(&frames, &mut out).unwrap();
+                out
+            })
+    };
+    assert_eq!(csv(1), csv(2));
+}
