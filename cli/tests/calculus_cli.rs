@@ -2,35 +2,9 @@
 //! would: the real binary, stdin in, stdout/stderr/exit code out.
 #![allow(clippy::unwrap_used)] // tests: a panic is the failure report
 
-use std::io::Write;
-use std::process::{Command, Output, Stdio};
+mod common;
 
-fn qrm(args: &[&str], stdin: &str) -> Output {
-    let mut child = Command::new(env!("CARGO_BIN_EXE_qrm"))
-        .args(args)
-        .stdin(Stdio::piped())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
-    child
-        .stdin
-        .take()
-        .unwrap()
-        .write_all(stdin.as_bytes())
-        .unwrap();
-    child.wait_with_output().unwrap()
-}
-
-fn ok(args: &[&str], stdin: &str) -> String {
-    let out = qrm(args, stdin);
-    assert!(
-        out.status.success(),
-        "qrm {args:?} failed: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    String::from_utf8(out.stdout).unwrap()
-}
+use common::{ok, qrm};
 
 fn json(args: &[&str]) -> serde_json::Value {
     serde_json::from_str(&ok(args, "")).unwrap()

@@ -3,20 +3,13 @@
 //! package reads the same logs in `tests/python/test_mcap.py`.
 #![allow(clippy::unwrap_used)] // tests: a panic is the failure report
 
+mod common;
+
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
 fn qrm(args: &[&str]) -> String {
-    let out = Command::new(env!("CARGO_BIN_EXE_qrm"))
-        .args(args)
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "qrm {args:?}: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    String::from_utf8(out.stdout).unwrap()
+    common::ok(args, "")
 }
 
 /// Builds the Go validator once; `None` (with a message) when Go or shared/ is missing outside CI.

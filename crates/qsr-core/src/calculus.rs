@@ -385,18 +385,12 @@ impl Calculus {
             );
             let mut valid = true;
             for i in 0..m {
-                let (ax, ay, bx, by, cx, cy) = (
+                let row = [
                     cols.0[i], cols.1[i], cols.2[i], cols.3[i], cols.4[i], cols.5[i],
-                );
-                let (dx, dy) = (bx - ax, by - ay);
-                let len2 = dx * dx + dy * dy;
-                let scale2 = 1.0 + ax * ax + ay * ay + bx * bx + by * by;
-                let tol2 = crate::frame::DEGENERATE_TOLERANCE * crate::frame::DEGENERATE_TOLERANCE;
-                valid &= (len2 > tol2 * scale2) & cx.is_finite() & cy.is_finite();
-                let inv = 1.0 / len2;
-                let (vx, vy) = (cx - ax, cy - ay);
-                xs[i] = -(dx * vy - dy * vx) * inv;
-                ys[i] = (dx * vx + dy * vy) * inv;
+                ];
+                let (x, y, ok) = normalise_row(&row);
+                (xs[i], ys[i]) = (x, y);
+                valid &= ok;
             }
             if !valid {
                 for i in 0..m {
@@ -579,19 +573,9 @@ fn classify_rows(partition: &Partition, triplets: &[[f64; 6]], out: &mut [StateI
     {
         let mut valid = true;
         for ((t, x), y) in rows.iter().zip(xs.iter_mut()).zip(ys.iter_mut()) {
-            let [ax, ay, bx, by, cx, cy] = *t;
-            let (dx, dy) = (bx - ax, by - ay);
-            let len2 = dx * dx + dy * dy;
-            // Coincidence as in `TernaryFrame::new` but with the scale bounded by squares
-            // (branch-free, vectorisable): |AB|² ≤ tol² · (1 + |A|² + |B|²).
-            let scale2 = 1.0 + ax * ax + ay * ay + bx * bx + by * by;
-            let tol2 = crate::frame::DEGENERATE_TOLERANCE * crate::frame::DEGENERATE_TOLERANCE;
-            // `len2 > ...` is false for NaN too: one test guards A and B.
-            valid &= (len2 > tol2 * scale2) & cx.is_finite() & cy.is_finite();
-            let inv = 1.0 / len2;
-            let (vx, vy) = (cx - ax, cy - ay);
-            *x = -(dx * vy - dy * vx) * inv;
-            *y = (dx * vx + dy * vy) * inv;
+            let ok;
+            (*x, *y, ok) = normalise_row(t);
+            valid &= ok;
         }
         if !valid {
             let (i, t) = rows
@@ -618,12 +602,24 @@ fn classify_rows(partition: &Partition, triplets: &[[f64; 6]], out: &mut [StateI
 }
 
 fn classify_rows_one_invalid(t: &[f64; 6]) -> bool {
+    !normalise_row(t).2
+}
+
+/// `(x, y, valid)` of `C` in the frame of `(A, B)` for a row `[ax, ay, bx, by, cx, cy]`:
+/// the branch-free core of the batch paths. Valid means finite and not coincident, the test of
+/// `TernaryFrame::new` with the scale bounded by squares: |AB|² > tol² · (1 + |A|² + |B|²)
+/// (false for NaN too, so one comparison guards A and B).
+#[inline(always)]
+fn normalise_row(t: &[f64; 6]) -> (f64, f64, bool) {
     let [ax, ay, bx, by, cx, cy] = *t;
     let (dx, dy) = (bx - ax, by - ay);
+    let len2 = dx * dx + dy * dy;
     let scale2 = 1.0 + ax * ax + ay * ay + bx * bx + by * by;
     let tol2 = crate::frame::DEGENERATE_TOLERANCE * crate::frame::DEGENERATE_TOLERANCE;
-    let valid = dx * dx + dy * dy > tol2 * scale2 && cx.is_finite() && cy.is_finite();
-    !valid
+    let valid = (len2 > tol2 * scale2) & cx.is_finite() & cy.is_finite();
+    let inv = 1.0 / len2;
+    let (vx, vy) = (cx - ax, cy - ay);
+    (-(dx * vy - dy * vx) * inv, (dx * vx + dy * vy) * inv, valid)
 }
 
 fn row_error(i: usize, t: &[f64; 6]) -> QsrError {

@@ -231,14 +231,9 @@ impl World {
     /// `max_range`: the distance and what was hit.
     #[must_use]
     pub fn cast_ray(&self, origin: [f64; 2], angle: f64, max_range: f64) -> Option<(f64, Hit)> {
-        let ray = Ray::new(
-            v(origin),
-            Vector::new(angle.cos() as f32, angle.sin() as f32),
-        );
-        let pipeline = self.pipeline();
-        let (h, toi) = pipeline.cast_ray(&ray, max_range as f32, true)?;
-        let hit = Hit::decode(self.colliders.get(h)?.user_data);
-        Some((f64::from(toi), hit))
+        self.cast_rays(origin, std::iter::once(angle), max_range)
+            .pop()
+            .flatten()
     }
 
     /// Many rays from one origin (one query pipeline for all of them).
