@@ -3,7 +3,7 @@
 //! | name | world | path | detector |
 //! |---|---|---|---|
 //! | `pqrm-100` | 10 landmarks uniform in 100 m × 100 m (thesis §2.3.1) | one loop of radius 50 m about the centre, a frame every 16° | range 60 m, Cartesian σ = 5 m |
-//! | `qlink-200` | 200 landmarks uniform in 200 m × 200 m, radius 0.3 m (§4.4.1) | lawn-mower coverage, lanes 20 m apart | range 20 m, σ = 0.3 m, full occlusion |
+//! | `qlink-200` | 200 landmarks uniform in 200 m × 200 m, at least 2 m apart, radius 0.3 m (§4.4.1; `with_landmark_radius` sets 0.1–0.7 m) | lawn-mower coverage, lanes 20 m apart | range 20 m, σ = 0.3 m, full occlusion |
 //! | `hallway` | two walls of point landmarks 6 m apart, one every 3 m (§3.4.1) | a straight drive down the middle | range 15 m, variance 0.1 m² |
 //! | `field` | a corridor between two long buildings (walls), a dense stand of pines, an open field with sparse posts and ground returns (§4.4.2) | a teleop-like path through all three | range 60 m, σ = 0.7 m |
 
@@ -54,14 +54,30 @@ pub struct Frame {
     pub scan: Option<LaserScan>,
 }
 
-fn uniform_landmarks(rng: &mut ChaCha8Rng, n: usize, side: f64, radius: f64) -> Vec<PointLandmark> {
-    (0..n)
-        .map(|i| PointLandmark {
-            id: i as u32,
-            pos: [rng.random_range(0.0..side), rng.random_range(0.0..side)],
-            radius,
-        })
-        .collect()
+/// `n` landmarks uniform in a square, rejecting any closer than `min_gap` to an earlier one
+/// (so the occlusion study's largest size, 0.7 m, never makes two discs overlap).
+fn uniform_landmarks(
+    rng: &mut ChaCha8Rng,
+    n: usize,
+    side: f64,
+    radius: f64,
+    min_gap: f64,
+) -> Vec<PointLandmark> {
+    let mut out: Vec<PointLandmark> = Vec::with_capacity(n);
+    while out.len() < n {
+        let pos = [rng.random_range(0.0..side), rng.random_range(0.0..side)];
+        if out
+            .iter()
+            .all(|l| (l.pos[0] - pos[0]).hypot(l.pos[1] - pos[1]) >= min_gap)
+        {
+            out.push(PointLandmark {
+                id: out.len() as u32,
+                pos,
+                radius,
+            });
+        }
+    }
+    out
 }
 
 /// Builds a named scenario from a seed; `world` replaces the generated world when given.
@@ -75,7 +91,7 @@ pub fn scenario(name: &str, seed: u64, world: Option<WorldSpec>) -> Result<Scena
         "pqrm-100" => {
             let spec = WorldSpec {
                 bounds: [0.0, 100.0, 0.0, 100.0],
-                landmarks: uniform_landmarks(&mut rng, 10, 100.0, 0.1),
+                landmarks: uniform_landmarks(&mut rng, 10, 100.0, 0.1, 0.0),
                 ..WorldSpec::default()
             };
             let pts: Vec<[f64; 2]> = (0..=23)
@@ -104,7 +120,7 @@ pub fn scenario(name: &str, seed: u64, world: Option<WorldSpec>) -> Result<Scena
         "qlink-200" => {
             let spec = WorldSpec {
                 bounds: [0.0, 200.0, 0.0, 200.0],
-                landmarks: uniform_landmarks(&mut rng, 200, 200.0, 0.3),
+                landmarks: uniform_landmarks(&mut rng, 200, 200.0, 0.3, 2.0),
                 ..WorldSpec::default()
             };
             let mut pts = Vec::new();
@@ -273,6 +289,36 @@ pub fn scenario(name: &str, seed: u64, world: Option<WorldSpec>) -> Result<Scena
 }
 
 impl Scenario {
+    /// The same scenario with every point landmark's radius set to `radius` (the landmark
+    /// size of the occlusion study, thesis §4.4.1: 0.1 to 0.7 m).
+    ///
+    /// # Errors
+    /// [`SimError::Invalid`] for a non-positive radius or one that makes landmarks overlap.
+    pub fn with_landmark_radius(self, radius: f64) -> Result<Self> {
+        check(radius.is_finite() && radius > 0.0, || {
+            format!("landmark radius {radius} must be finite and > 0")
+        })?;
+        let mut spec = self.world.spec().clone();
+        spec.landmarks.iter_mut().for_each(|l| l.radius = radius);
+        for (i, a) in spec.landmarks.iter().enumerate() {
+            for b in &spec.landmarks[i + 1..] {
+                check(
+                    (a.pos[0] - b.pos[0]).hypot(a.pos[1] - b.pos[1]) > 2.0 * radius,
+                    || {
+                        format!(
+                            "with radius {radius} landmarks {} and {} overlap",
+                            a.id, b.id
+                        )
+                    },
+                )?;
+            }
+        }
+        Ok(Self {
+            world: World::new(spec)?,
+            ..self
+        })
+    }
+
     /// Drives the path with a unicycle (pure pursuit, 0.05 s steps) and records a frame every
     /// `frame_period`: detections always, a lidar scan when `lidar` is set. Sensor noise is
     /// drawn from a generator seeded by `seed`.

@@ -368,3 +368,31 @@ fn observations_are_byte_identical_for_one_and_two_threads() {
     };
     assert_eq!(csv(1), csv(2));
 }
+
+#[test]
+fn landmark_sizes_are_configurable_and_bigger_landmarks_occlude_more() {
+    let seen = |r: f64| {
+        let sc = sim2d::scenario("qlink-200", 4, None)
+            .unwrap()
+            .with_landmark_radius(r)
+            .unwrap();
+        assert!(sc.world.spec().landmarks.iter().all(|l| l.radius == r));
+        sc.run(4, false)
+            .unwrap()
+            .iter()
+            .map(|f| f.detections.len())
+            .sum::<usize>()
+    };
+    let (small, large) = (seen(0.1), seen(0.7));
+    assert!(
+        large < small,
+        "full occlusion hides more with larger landmarks: {large} vs {small}"
+    );
+    let sc = sim2d::scenario("hallway", 1, None).unwrap();
+    assert!(sc.with_landmark_radius(-0.2).is_err());
+    let sc = sim2d::scenario("hallway", 1, None).unwrap();
+    assert!(
+        sc.with_landmark_radius(5.0).is_err(),
+        "landmarks 3 m apart cannot have a 5 m radius"
+    );
+}
