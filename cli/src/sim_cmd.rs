@@ -24,6 +24,10 @@ pub struct SimArgs {
     /// Set every point landmark's radius (m), e.g. the occlusion study's 0.1–0.7 m sizes.
     #[arg(long)]
     pub landmark_radius: Option<f64>,
+    /// Landmark detector: `ideal` (ids known, full occlusion) or `lidar` (extracted from the
+    /// scan, recognised across frames by triangles, no ids; thesis §4.4.2).
+    #[arg(long, default_value = "ideal")]
+    pub detector: String,
     /// Skip the lidar (detections only; much smaller logs).
     #[arg(long)]
     pub no_lidar: bool,
@@ -55,9 +59,39 @@ pub fn run(a: SimArgs) -> Result<()> {
     if let Some(r) = a.landmark_radius {
         sc = sc.with_landmark_radius(r)?;
     }
+    let lidar_detector = match a.detector.as_str() {
+        "ideal" => false,
+        "lidar" if a.no_lidar => bail!("--detector lidar needs the lidar (drop --no-lidar)"),
+        "lidar" => true,
+        other => bail!("unknown --detector `{other}` (ideal, lidar)"),
+    };
     let pb = crate::progress::bar(1, &format!("simulating {}", a.scenario));
-    let frames = sc.run(a.seed, !a.no_lidar)?;
+    let mut frames = sc.run(a.seed, !a.no_lidar)?;
     pb.finish_and_clear();
+    // Landmark id → true position, written as truth.csv for scoring maps.
+    let mut truth: std::collections::BTreeMap<u32, [f64; 2]> = sc
+        .world
+        .spec()
+        .landmarks
+        .iter()
+        .map(|l| (l.id, l.pos))
+        .collect();
+    if lidar_detector {
+        // Recognised ids are the detector's own; each is scored against the landmark it was
+        // first recognised from (clutter has no truth and stays unscored).
+        truth.clear();
+        let mut det = sim2d::LidarDetector::new(0.3, 0.1);
+        for f in &mut frames {
+            let Some(scan) = &f.scan else { continue };
+            let found = det.detect(scan);
+            for (d, hit) in &found {
+                if let (Some(sim2d::Hit::Landmark(i)), false) = (hit, truth.contains_key(&d.id)) {
+                    truth.insert(d.id, sc.world.spec().landmarks[*i].pos);
+                }
+            }
+            f.detections = found.into_iter().map(|(d, _)| d).collect();
+        }
+    }
     std::fs::create_dir_all(&a.out).with_context(|| format!("creating {}", a.out.display()))?;
     let mut csv = Vec::new();
     sim2d::write_observations_csv(&frames, &mut csv)?;
@@ -66,11 +100,11 @@ pub fn run(a: SimArgs) -> Result<()> {
         &a.out.join("world.toml"),
         toml::to_string(sc.world.spec())?.as_bytes(),
     )?;
-    let mut truth = String::from("landmark,x,y\n");
-    for l in &sc.world.spec().landmarks {
-        truth.push_str(&format!("{},{},{}\n", l.id, l.pos[0], l.pos[1]));
+    let mut truth_csv = String::from("landmark,x,y\n");
+    for (id, p) in &truth {
+        truth_csv.push_str(&format!("{id},{},{}\n", p[0], p[1]));
     }
-    write_atomic(&a.out.join("truth.csv"), truth.as_bytes())?;
+    write_atomic(&a.out.join("truth.csv"), truth_csv.as_bytes())?;
     write_log(&a.out.join("run.mcap"), &sc, &frames)?;
     let traj: Vec<(f64, f64)> = frames.iter().map(|f| (f.pose.x, f.pose.y)).collect();
     let rays: Vec<crate::plot::Segment> = frames

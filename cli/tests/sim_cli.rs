@@ -108,6 +108,46 @@ fn every_scenario_writes_a_valid_log_and_a_mappable_csv() {
 }
 
 #[test]
+fn lidar_only_mapping_is_a_pipeline_too() {
+    // The §4.4.2 set-up: landmarks from the lidar alone, recognised without ids.
+    let root = Path::new(env!("CARGO_TARGET_TMPDIR")).join("sim-lidar");
+    let (sim, map) = (root.join("sim"), root.join("map"));
+    qrm(&[
+        "sim",
+        "--scenario",
+        "field",
+        "--detector",
+        "lidar",
+        "--seed",
+        "2",
+        "--out",
+        sim.to_str().unwrap(),
+    ]);
+    qrm(&[
+        "map",
+        "--format",
+        "csv",
+        "--input",
+        sim.join("observations.csv").to_str().unwrap(),
+        "--truth",
+        sim.join("truth.csv").to_str().unwrap(),
+        "--calculus",
+        "left-right",
+        "--samples",
+        "100",
+        "--out",
+        map.to_str().unwrap(),
+    ]);
+    let s: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(map.join("summary.json")).unwrap()).unwrap();
+    assert!(s["n_scored"].as_u64().unwrap() > 100, "{s}");
+    assert!(
+        s["error_rate"].as_f64().unwrap() < 0.25,
+        "lidar-only maps mostly right: {s}"
+    );
+}
+
+#[test]
 fn seeds_make_runs_byte_identical_and_bad_input_fails() {
     let root = Path::new(env!("CARGO_TARGET_TMPDIR")).join("sim-seeds");
     let run = |dir: &str, seed: &str| {

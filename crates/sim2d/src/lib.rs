@@ -29,7 +29,9 @@ mod sensors;
 mod world;
 
 pub use error::{Result, SimError};
-pub use extractor::{Candidate, CandidateKind, ExtractorConfig, TriangleRecognizer, extract};
+pub use extractor::{
+    Candidate, CandidateKind, ExtractorConfig, LidarDetector, TriangleRecognizer, extract,
+};
 pub use scenario::{Frame, SCENARIOS, Scenario, scenario, write_observations_csv};
 pub use sensors::{
     Detection, DetectorConfig, DetectorNoise, LaserScan, LidarConfig, Pose, Unicycle,
