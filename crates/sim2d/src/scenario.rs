@@ -334,15 +334,12 @@ impl Scenario {
         let mut robot = Unicycle::new(self.start, self.speed, 1.5, dt)?;
         let mut frames = Vec::new();
         let mut t = 0.0;
-        let mut next_frame = 0.0;
         let per_frame = (self.frame_period / dt).round().max(1.0) as u64;
         let mut step: u64 = 0;
         let max_steps = 200_000;
         for wp in &self.waypoints {
             loop {
                 if step.is_multiple_of(per_frame) {
-                    let _ = next_frame;
-                    next_frame = t + self.frame_period;
                     let detections = self.world.detect(&robot.pose, &self.detector, &mut rng)?;
                     let scan = if lidar {
                         Some(self.world.lidar(&robot.pose, &self.lidar, &mut rng)?)
