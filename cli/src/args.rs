@@ -27,6 +27,9 @@ pub enum Command {
     Map(MapArgs),
     /// Run a simulated scenario: MCAP log, observation CSV, world file, picture.
     Sim(crate::sim_cmd::SimArgs),
+    /// Salient region maps: learn partitions and calculi from beliefs (SERGE, chapter 3).
+    #[command(subcommand)]
+    Serge(crate::serge_cmd::SergeCmd),
 }
 
 /// `qrm pqrm ...`.
@@ -196,6 +199,10 @@ pub enum CalculusCmd {
         /// Print JSON `{"states", "table": {r: {s: [t...]}}}`.
         #[arg(long)]
         json: bool,
+        /// `sampled` (witnessed configurations, any calculus) or `cells` (thesis Algorithm 3
+        /// over a learned calculus's raster with interval bounds: sound by construction).
+        #[arg(long, default_value = "sampled")]
+        method: String,
     },
     /// A permutation operation table.
     Permute {

@@ -32,6 +32,7 @@ enum Job {
     Compose {
         calculus: Calculus,
         json: bool,
+        cells: bool,
     },
     Permute {
         calculus: Calculus,
@@ -67,9 +68,14 @@ fn validate(cmd: CalculusCmd) -> Result<Job> {
             calculus: load(&name)?,
             json,
         },
-        CalculusCmd::Compose { name, json } => Job::Compose {
+        CalculusCmd::Compose { name, json, method } => Job::Compose {
             calculus: load(&name)?,
             json,
+            cells: match method.as_str() {
+                "sampled" => false,
+                "cells" => true,
+                other => bail!("unknown compose method `{other}` (sampled or cells)"),
+            },
         },
         CalculusCmd::Permute { name, op, json } => {
             let op: Permutation = op.parse()?;
@@ -120,7 +126,11 @@ pub fn run(cmd: CalculusCmd) -> Result<()> {
         }
         Job::Classify { calculus } => classify(&mut out, &calculus)?,
         Job::Neighbours { calculus, json } => neighbours(&mut out, &calculus, json)?,
-        Job::Compose { calculus, json } => compose(&mut out, &calculus, json)?,
+        Job::Compose {
+            calculus,
+            json,
+            cells,
+        } => compose(&mut out, &calculus, json, cells)?,
         Job::Permute { calculus, op, json } => permute(&mut out, &calculus, op, json)?,
         Job::Render {
             calculus,
@@ -288,8 +298,15 @@ fn neighbours(out: &mut impl Write, c: &Calculus, json: bool) -> Result<()> {
     Ok(())
 }
 
-fn compose(out: &mut impl Write, c: &Calculus, json: bool) -> Result<()> {
-    let t = c.compose_table()?;
+fn compose(out: &mut impl Write, c: &Calculus, json: bool, cells: bool) -> Result<()> {
+    // `cells`: Algorithm 3 over the raster of a learned calculus (sound by construction)
+    let owned;
+    let t = if cells {
+        owned = serge::learn::compose_table(c)?;
+        &owned
+    } else {
+        c.compose_table()?
+    };
     if json {
         let mut table = BTreeMap::new();
         for r in c.states() {

@@ -13,6 +13,7 @@ mod output;
 mod plot;
 mod pqrm_cmd;
 mod progress;
+mod serge_cmd;
 mod sim_cmd;
 
 use std::process::ExitCode;
@@ -26,6 +27,7 @@ fn main() -> ExitCode {
         args::Command::Pqrm(cmd) => pqrm_cmd::run(cmd),
         args::Command::Map(a) => pqrm_cmd::map(a),
         args::Command::Sim(a) => sim_cmd::run(a),
+        args::Command::Serge(cmd) => serge_cmd::run(cmd),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -504,3 +504,184 @@ pub fn scenario_map(
         |r| draw_scenario(r, title, world, traj, rays),
     )
 }
+
+/// What a salient-region map picture shows (Figs 3.8–3.10).
+pub struct RegionPicture<'a> {
+    /// `[x0, x1, y0, y1]` of the grid.
+    pub window: [f64; 4],
+    /// Cells along x and y.
+    pub nx: usize,
+    /// Cells along y.
+    pub ny: usize,
+    /// Region of every cell (`u32::MAX`: not drawn).
+    pub cell_region: &'a [u32],
+    /// Data points to overlay (black).
+    pub points: &'a [[f64; 2]],
+    /// Highlighted points (magenta), e.g. landmark F of Fig 3.10.
+    pub highlight: &'a [[f64; 2]],
+    /// Cells to shade dark (e.g. Algorithm 3's reachable area).
+    pub shade: Option<&'a [bool]>,
+    /// Labelled marks (red): reference landmarks.
+    pub marks: &'a [([f64; 2], String)],
+    /// Write each region's number at its centroid.
+    pub numbers: bool,
+}
+
+fn pastel(i: usize) -> RGBColor {
+    // golden-angle hues, light: many regions stay distinguishable
+    let h = (i as f64 * 137.508) % 360.0;
+    let (s, l) = (0.55, 0.78);
+    let c = (1.0 - (2.0 * l - 1.0_f64).abs()) * s;
+    let x = c * (1.0 - ((h / 60.0) % 2.0 - 1.0).abs());
+    let (r, g, b) = match (h / 60.0) as u32 {
+        0 => (c, x, 0.0),
+        1 => (x, c, 0.0),
+        2 => (0.0, c, x),
+        3 => (0.0, x, c),
+        4 => (x, 0.0, c),
+        _ => (c, 0.0, x),
+    };
+    let m = l - c / 2.0;
+    let to = |v: f64| ((v + m) * 255.0).round().clamp(0.0, 255.0) as u8;
+    RGBColor(to(r), to(g), to(b))
+}
+
+fn draw_regions<DB: DrawingBackend>(
+    root: &DrawingArea<DB, Shift>,
+    title: &str,
+    p: &RegionPicture<'_>,
+) -> Drawn
+where
+    DB::ErrorType: 'static,
+{
+    root.fill(&WHITE)?;
+    let [x0, x1, y0, y1] = p.window;
+    let mut chart = ChartBuilder::on(root)
+        .margin(12)
+        .caption(title, ("sans-serif", 18))
+        .x_label_area_size(36)
+        .y_label_area_size(48)
+        .build_cartesian_2d(x0..x1, y0..y1)?;
+    chart
+        .configure_mesh()
+        .disable_mesh()
+        .label_style(("sans-serif", 12))
+        .draw()?;
+    let (dx, dy) = ((x1 - x0) / p.nx as f64, (y1 - y0) / p.ny as f64);
+    // one rectangle per run of equal cells in a row keeps the SVG small
+    let mut rects = Vec::new();
+    for j in 0..p.ny {
+        let mut i = 0;
+        while i < p.nx {
+            let c = j * p.nx + i;
+            let r = p.cell_region[c];
+            let shaded = p.shade.is_some_and(|s| s[c]);
+            let mut e = i + 1;
+            while e < p.nx
+                && p.cell_region[j * p.nx + e] == r
+                && p.shade.is_some_and(|s| s[j * p.nx + e]) == shaded
+            {
+                e += 1;
+            }
+            if r != u32::MAX {
+                let base = pastel(r as usize);
+                let colour = if shaded {
+                    RGBColor(base.0 / 2, base.1 / 2, base.2 / 2)
+                } else {
+                    base
+                };
+                rects.push(Rectangle::new(
+                    [
+                        (x0 + i as f64 * dx, y0 + j as f64 * dy),
+                        (x0 + e as f64 * dx, y0 + (j + 1) as f64 * dy),
+                    ],
+                    colour.filled(),
+                ));
+            }
+            i = e;
+        }
+    }
+    chart.draw_series(rects)?;
+    // region borders
+    let mut lines = Vec::new();
+    for j in 0..p.ny {
+        for i in 0..p.nx {
+            let c = j * p.nx + i;
+            if i + 1 < p.nx && p.cell_region[c + 1] != p.cell_region[c] {
+                let x = x0 + (i + 1) as f64 * dx;
+                lines.push(PathElement::new(
+                    vec![(x, y0 + j as f64 * dy), (x, y0 + (j + 1) as f64 * dy)],
+                    BLACK.stroke_width(1),
+                ));
+            }
+            if j + 1 < p.ny && p.cell_region[c + p.nx] != p.cell_region[c] {
+                let y = y0 + (j + 1) as f64 * dy;
+                lines.push(PathElement::new(
+                    vec![(x0 + i as f64 * dx, y), (x0 + (i + 1) as f64 * dx, y)],
+                    BLACK.stroke_width(1),
+                ));
+            }
+        }
+    }
+    chart.draw_series(lines)?;
+    let inside = |q: &[f64; 2]| q[0] >= x0 && q[0] <= x1 && q[1] >= y0 && q[1] <= y1;
+    chart.draw_series(
+        p.points
+            .iter()
+            .filter(|q| inside(q))
+            .map(|q| Circle::new((q[0], q[1]), 1, BLACK.filled())),
+    )?;
+    chart.draw_series(
+        p.highlight
+            .iter()
+            .filter(|q| inside(q))
+            .map(|q| Circle::new((q[0], q[1]), 3, RGBColor(220, 0, 220).filled())),
+    )?;
+    for (q, label) in p.marks {
+        chart.draw_series(std::iter::once(Circle::new((q[0], q[1]), 5, RED.filled())))?;
+        chart.draw_series(std::iter::once(Text::new(
+            label.clone(),
+            (q[0] + dx, q[1] + dy),
+            ("sans-serif", 14).into_font().color(&RED),
+        )))?;
+    }
+    if p.numbers {
+        let n = p
+            .cell_region
+            .iter()
+            .filter(|&&r| r != u32::MAX)
+            .max()
+            .map_or(0, |&r| r as usize + 1);
+        let mut acc = vec![(0.0, 0.0, 0usize); n];
+        for (c, &r) in p.cell_region.iter().enumerate() {
+            if r != u32::MAX {
+                let a = &mut acc[r as usize];
+                a.0 += x0 + ((c % p.nx) as f64 + 0.5) * dx;
+                a.1 += y0 + ((c / p.nx) as f64 + 0.5) * dy;
+                a.2 += 1;
+            }
+        }
+        chart.draw_series(
+            acc.iter()
+                .enumerate()
+                .filter(|(_, a)| a.2 > 0)
+                .map(|(r, a)| {
+                    Text::new(
+                        (r + 1).to_string(),
+                        (a.0 / a.2 as f64, a.1 / a.2 as f64),
+                        ("sans-serif", 13).into_font().color(&BLACK),
+                    )
+                }),
+        )?;
+    }
+    Ok(())
+}
+
+/// A salient-region map with data overlaid.
+pub fn region_map(stem: &Path, title: &str, picture: &RegionPicture<'_>) -> Result<Vec<PathBuf>> {
+    both(
+        stem,
+        |r| draw_regions(r, title, picture),
+        |r| draw_regions(r, title, picture),
+    )
+}

@@ -174,6 +174,34 @@ impl ComposeTable {
         Self { table }
     }
 
+    /// A table computed elsewhere (e.g. SERGE's cell-by-cell Algorithm 3 for a learned
+    /// calculus): `rows[r][s]` lists the possible `{A,B:D}`. Each list is sorted and
+    /// deduplicated here.
+    ///
+    /// # Errors
+    /// [`crate::QsrError::Arity`] when the table is not `n × n` or names a state `≥ n`.
+    pub fn from_rows(mut rows: Vec<Vec<Vec<StateId>>>) -> crate::Result<Self> {
+        let n = rows.len();
+        for (r, row) in rows.iter_mut().enumerate() {
+            if row.len() != n {
+                return Err(crate::QsrError::Arity(format!(
+                    "compose table row {r} has {} columns, expected {n}",
+                    row.len()
+                )));
+            }
+            for entry in row.iter_mut() {
+                if let Some(bad) = entry.iter().find(|t| t.index() >= n) {
+                    return Err(crate::QsrError::Arity(format!(
+                        "compose table entry names state {bad}, the table has {n} states"
+                    )));
+                }
+                entry.sort_unstable();
+                entry.dedup();
+            }
+        }
+        Ok(Self { table: rows })
+    }
+
     /// The possible `{A,B:D}` for `{A,B:C} = r`, `{B,C:D} = s` (sorted).
     #[must_use]
     pub fn get(&self, r: StateId, s: StateId) -> &[StateId] {

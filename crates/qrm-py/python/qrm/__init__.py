@@ -2,14 +2,16 @@
 
 Calculi (`Calculus`), probabilistic qualitative relational mapping (`Pqrm`), observation
 files (`read_observations`) and the thesis's Monte Carlo study, sharded for distributed runs
-(`monte_carlo_config`, `monte_carlo_shard`, `monte_carlo_aggregate`, `monte_carlo`).
+(`monte_carlo_config`, `monte_carlo_shard`, `monte_carlo_aggregate`, `monte_carlo`); salient
+region maps and learned calculi (`serge`, `SalientRegionMap`, `compose_cells`,
+`serge_cross_validate`).
 
 Every error is a `QrmError`; the subclasses say what kind (see the hierarchy in the stubs).
 """
 from __future__ import annotations
 
 import json
-from typing import Any, Dict, List, Optional, Sequence
+from typing import Any, Dict, List, Mapping, Optional, Sequence, Tuple, Union
 
 from ._qrm import (
     Calculus,
@@ -19,10 +21,12 @@ from ._qrm import (
     IoError,
     Pqrm,
     QrmError,
+    SalientRegionMap,
     SpecError,
     UnsupportedError,
     __version__,
     builtin_names,
+    compose_cells,
     read_observations,
     single_observation,
 )
@@ -36,15 +40,19 @@ __all__ = [
     "IoError",
     "Pqrm",
     "QrmError",
+    "SalientRegionMap",
     "SpecError",
     "UnsupportedError",
     "__version__",
     "builtin_names",
+    "compose_cells",
     "monte_carlo",
     "monte_carlo_aggregate",
     "monte_carlo_config",
     "monte_carlo_shard",
     "read_observations",
+    "serge",
+    "serge_cross_validate",
     "sim",
     "single_observation",
 ]
@@ -85,3 +93,53 @@ def monte_carlo(config: Optional[Dict[str, Any]] = None) -> Dict[str, Any]:
     """The whole study in this process (all cores)."""
     config = config if config is not None else monte_carlo_config(quick=True)
     return monte_carlo_aggregate(config, [monte_carlo_shard(config, 0, int(config["trials"]))])
+
+
+def _plain(value: Any) -> Any:
+    """NumPy arrays and tuples to lists, for the JSON hand-over to the native module."""
+    if hasattr(value, "tolist"):
+        return value.tolist()
+    if isinstance(value, (list, tuple)):
+        return [_plain(v) for v in value]
+    return value
+
+
+def serge(
+    beliefs: Union[str, Sequence[Mapping[str, Any]]],
+    mu: int,
+    *,
+    sigma: float = 2.0,
+    trials: Optional[int] = None,
+    grid: int = 200,
+    window: Optional[Tuple[float, float, float, float]] = None,
+    seed: int = 0,
+) -> SalientRegionMap:
+    """A salient region map of `beliefs` (SERGE, thesis Algorithm 2).
+
+    Each belief is `{"mean": [x, y], "cov": [[a, b], [b, c]]}` or `{"samples": (n, 2)}`
+    (lists or NumPy arrays), or pass the whole JSON document `{"beliefs": [...]}` as a string.
+    `mu` is the desired number of regions, `sigma` ≥ 0 how much saliency may buy fewer regions
+    (0: exactly `mu`), `trials` defaults to 100·K. Deterministic for a seed.
+    """
+    if isinstance(beliefs, str):
+        text = beliefs
+    else:
+        items = []
+        for b in beliefs:
+            unknown = set(b) - {"mean", "cov", "samples"}
+            if unknown:
+                raise InvalidInput(f"unknown belief keys {sorted(unknown)} (mean/cov or samples)")
+            items.append({k: _plain(v) for k, v in b.items()})
+        try:
+            text = json.dumps({"beliefs": items}, allow_nan=False)
+        except ValueError as e:
+            raise InvalidInput(f"beliefs hold a non-finite number: {e}") from None
+    return _qrm.serge_run(text, mu, sigma, trials, grid, window, seed)
+
+
+def serge_cross_validate(dataset: str, *, quick: bool = True, seed: int = 0) -> List[Dict[str, Any]]:
+    """The thesis's 5-fold cross-validation study (§3.4) on `well-separated`, `hallway` or
+    `lab`: one record per SERGE run (sweep, mu, sigma, fold, n_regions, train_log_saliency,
+    test_log_likelihood, errors, points)."""
+    records: List[Dict[str, Any]] = json.loads(_qrm.serge_cross_validate(dataset, quick, seed))
+    return records

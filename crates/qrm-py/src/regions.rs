@@ -1,0 +1,258 @@
+//! `qrm.SalientRegionMap`, `qrm._qrm.serge_run` and the SERGE study: thin wrappers of the
+//! `serge` crate.
+
+use numpy::{IntoPyArray, PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray2};
+use pyo3::prelude::*;
+use serge::{BeliefSet, CellMasses, Grid, Serge, SergeError, SergeParams};
+
+use crate::calculus::Calculus;
+use crate::errors::{FormatError, InvalidInput, IoError, invalid, qsr};
+
+/// The Python exception for a SERGE error.
+pub(crate) fn serge_err(e: SergeError) -> PyErr {
+    let msg = e.to_string();
+    match e {
+        SergeError::Calculus(inner) => qsr(inner),
+        SergeError::Parse { .. } => FormatError::new_err(msg),
+        SergeError::Io { .. } => IoError::new_err(msg),
+        _ => InvalidInput::new_err(msg),
+    }
+}
+
+/// A salient region map (thesis §3.2): regions of grid cells, a region per belief.
+#[pyclass(module = "qrm", frozen)]
+pub(crate) struct SalientRegionMap {
+    inner: serge::SalientRegionMap,
+    initial_regions: usize,
+}
+
+#[pymethods]
+impl SalientRegionMap {
+    /// Number of regions |R|.
+    #[getter]
+    fn n_regions(&self) -> usize {
+        self.inner.n_regions
+    }
+
+    /// Region of each belief (input order).
+    #[getter]
+    fn assignment(&self) -> Vec<u32> {
+        self.inner.assignment.clone()
+    }
+
+    /// Saliency (mass on its region) of each belief.
+    #[getter]
+    fn saliency(&self) -> Vec<f64> {
+        self.inner.saliency.clone()
+    }
+
+    /// log ψ3: the sum of the beliefs' log saliencies.
+    #[getter]
+    fn log_saliency(&self) -> f64 {
+        self.inner.log_saliency
+    }
+
+    /// log φ = log ψ1 + log ψ3.
+    #[getter]
+    fn log_phi(&self) -> f64 {
+        self.inner.log_phi()
+    }
+
+    /// Number of initial regions SERGE started from.
+    #[getter]
+    fn initial_regions(&self) -> usize {
+        self.initial_regions
+    }
+
+    /// Grid window (x0, x1, y0, y1).
+    #[getter]
+    fn window(&self) -> (f64, f64, f64, f64) {
+        let w = self.inner.grid.window;
+        (w[0], w[1], w[2], w[3])
+    }
+
+    /// Region of every grid cell as an (ny, nx) int64 array, row 0 at y0.
+    fn cells<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<i64>>> {
+        let g = self.inner.grid;
+        let flat: Vec<i64> = self
+            .inner
+            .cell_region
+            .iter()
+            .map(|&r| i64::from(r))
+            .collect();
+        flat.into_pyarray(py)
+            .reshape([g.ny, g.nx])
+            .map_err(|e| invalid(e.to_string()))
+    }
+
+    /// Region of each point of an (n, 2) array (points outside the window: the nearest
+    /// border cell's).
+    fn region_of<'py>(
+        &self,
+        py: Python<'py>,
+        points: PyReadonlyArray2<'py, f64>,
+    ) -> PyResult<Bound<'py, PyArray1<i64>>> {
+        let view = points.as_array();
+        if view.ncols() != 2 {
+            return Err(invalid(format!(
+                "points must have shape (n, 2), got {:?}",
+                view.shape()
+            )));
+        }
+        let out: Vec<i64> = view
+            .rows()
+            .into_iter()
+            .map(|r| {
+                if r[0].is_finite() && r[1].is_finite() {
+                    Ok(self.inner.region_of([r[0], r[1]]).map_or(-1, i64::from))
+                } else {
+                    Err(invalid(format!("point ({}, {}) is not finite", r[0], r[1])))
+                }
+            })
+            .collect::<PyResult<_>>()?;
+        Ok(out.into_pyarray(py))
+    }
+
+    /// Region adjacency as (a, b, shared border in cell edges) triples.
+    fn adjacency(&self) -> Vec<(usize, usize, u32)> {
+        let g = self.inner.adjacency();
+        g.edge_indices()
+            .filter_map(|e| {
+                let (a, b) = g.edge_endpoints(e)?;
+                Some((a.index(), b.index(), g[e]))
+            })
+            .collect()
+    }
+
+    /// Outline rings of region `r` as lists of (x, y).
+    fn polygons(&self, r: u32) -> PyResult<Vec<Vec<(f64, f64)>>> {
+        if r as usize >= self.inner.n_regions {
+            return Err(invalid(format!(
+                "no region {r} (the map has {})",
+                self.inner.n_regions
+            )));
+        }
+        Ok(self
+            .inner
+            .polygons(r)
+            .into_iter()
+            .map(|ring| ring.into_iter().map(|p| (p[0], p[1])).collect())
+            .collect())
+    }
+
+    /// The map as JSON (what `qrm serge run` writes as map.json).
+    fn to_json(&self) -> PyResult<String> {
+        serde_json::to_string(&self.inner.to_json()).map_err(|e| invalid(e.to_string()))
+    }
+
+    /// The map as a learned ternary calculus (beliefs must be in a normalised triplet frame).
+    #[pyo3(signature = (name = "learned", description = ""))]
+    fn to_calculus(&self, name: &str, description: &str) -> PyResult<Calculus> {
+        Ok(Calculus {
+            inner: self
+                .inner
+                .to_calculus(name, description)
+                .map_err(serge_err)?,
+        })
+    }
+
+    fn __repr__(&self) -> String {
+        format!(
+            "SalientRegionMap(n_regions={}, log_saliency={:.4}, mu={}, sigma={})",
+            self.inner.n_regions, self.inner.log_saliency, self.inner.mu, self.inner.sigma
+        )
+    }
+}
+
+/// SERGE on beliefs given as the JSON input document.
+#[pyfunction]
+#[pyo3(signature = (beliefs_json, mu, sigma, trials, grid, window, seed))]
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn serge_run(
+    py: Python<'_>,
+    beliefs_json: &str,
+    mu: usize,
+    sigma: f64,
+    trials: Option<usize>,
+    grid: usize,
+    window: Option<(f64, f64, f64, f64)>,
+    seed: u64,
+) -> PyResult<SalientRegionMap> {
+    let text = beliefs_json.to_owned();
+    py.detach(move || {
+        let beliefs = BeliefSet::from_json_str(&text, "beliefs")?;
+        let g = match window {
+            Some((a, b, c, d)) => Grid::new([a, b, c, d], grid, grid)?,
+            None => Grid::around(&beliefs, grid, grid)?,
+        };
+        let masses = CellMasses::compute(&beliefs, g)?;
+        let serge = Serge::new(&masses)?;
+        let mut params = SergeParams::new(mu, sigma).seed(seed);
+        if let Some(t) = trials {
+            params = params.trials(t);
+        }
+        Ok(SalientRegionMap {
+            inner: serge.run(&params)?,
+            initial_regions: serge.n_initial_regions(),
+        })
+    })
+    .map_err(serge_err)
+}
+
+/// The thesis's cross-validation study on a generated dataset; returns JSON records.
+#[pyfunction]
+#[pyo3(signature = (dataset, quick, seed))]
+pub(crate) fn serge_cross_validate(
+    py: Python<'_>,
+    dataset: &str,
+    quick: bool,
+    seed: u64,
+) -> PyResult<String> {
+    let name = dataset.to_owned();
+    let records = py
+        .detach(move || {
+            let config = if quick {
+                serge::study::StudyConfig::quick(seed)
+            } else {
+                serge::study::StudyConfig::full(seed)
+            };
+            let mut data = serge::datasets::Dataset::generate(&name, seed)?;
+            if data.observations.is_some() {
+                data = data.with_samples(config.samples);
+            }
+            serge::study::cross_validate(&data, &config, &|| {})
+        })
+        .map_err(serge_err)?;
+    serde_json::to_string(&records).map_err(|e| invalid(e.to_string()))
+}
+
+/// Algorithm 3 compose table of a learned (raster) calculus, sound by construction.
+#[pyfunction]
+pub(crate) fn compose_cells(
+    py: Python<'_>,
+    calculus: &Calculus,
+) -> PyResult<std::collections::BTreeMap<String, std::collections::BTreeMap<String, Vec<String>>>> {
+    let c = &calculus.inner;
+    let table = py
+        .detach(|| serge::learn::compose_table(c))
+        .map_err(serge_err)?;
+    Ok(c.states()
+        .map(|r| {
+            (
+                c.label(r).to_owned(),
+                c.states()
+                    .map(|s| {
+                        (
+                            c.label(s).to_owned(),
+                            table
+                                .get(r, s)
+                                .iter()
+                                .map(|t| c.label(*t).to_owned())
+                                .collect(),
+                        )
+                    })
+                    .collect(),
+            )
+        })
+        .collect())
+}
