@@ -30,6 +30,12 @@ pub enum Command {
     /// Salient region maps: learn partitions and calculi from beliefs (SERGE, chapter 3).
     #[command(subcommand)]
     Serge(crate::serge_cmd::SergeCmd),
+    /// Navigation with qualitative maps (Q-Link, chapter 4): studies.
+    #[command(subcommand)]
+    Qlink(crate::qlink_cmd::QlinkCmd),
+    /// The whole pipeline: map the field site with a lidar, learn a calculus with SERGE,
+    /// navigate with Q-Link; writes out/demo/run.mcap (Foxglove), summary.json, demo.svg.
+    Demo(crate::demo_cmd::DemoArgs),
 }
 
 /// `qrm pqrm ...`.

@@ -8,11 +8,13 @@
 
 mod args;
 mod calculus_cmd;
+mod demo_cmd;
 mod mcap_log;
 mod output;
 mod plot;
 mod pqrm_cmd;
 mod progress;
+mod qlink_cmd;
 mod serge_cmd;
 mod sim_cmd;
 
@@ -28,6 +30,8 @@ fn main() -> ExitCode {
         args::Command::Map(a) => pqrm_cmd::map(a),
         args::Command::Sim(a) => sim_cmd::run(a),
         args::Command::Serge(cmd) => serge_cmd::run(cmd),
+        args::Command::Qlink(cmd) => qlink_cmd::run(cmd),
+        args::Command::Demo(a) => demo_cmd::run(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

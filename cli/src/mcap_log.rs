@@ -148,6 +148,25 @@ impl McapLog {
         })
     }
 
+    /// Registers another channel: `schema_name` is a Foxglove well-known schema
+    /// (`foxglove.SceneUpdate`, …) when `schema` is `None`, else our own JSON Schema text.
+    pub fn add_channel(
+        &mut self,
+        topic: &str,
+        schema_name: &str,
+        schema: Option<&str>,
+    ) -> Result<()> {
+        let text = schema.map_or_else(|| foxglove_schema(schema_name), str::to_owned);
+        let sid = self
+            .writer
+            .add_schema(schema_name, "jsonschema", text.as_bytes())?;
+        let cid = self
+            .writer
+            .add_channel(sid, topic, "json", &BTreeMap::new())?;
+        self.channels.insert(topic.to_owned(), cid);
+        Ok(())
+    }
+
     /// Writes one JSON message at simulated time `t` (s).
     pub fn write(&mut self, topic: &str, t: f64, message: &Value) -> Result<()> {
         let channel_id = *self

@@ -145,6 +145,17 @@ pub fn run(a: SimArgs) -> Result<()> {
 
 fn write_log(path: &std::path::Path, sc: &sim2d::Scenario, frames: &[sim2d::Frame]) -> Result<()> {
     let mut log = McapLog::create(path)?;
+    write_world(&mut log, sc)?;
+    for f in frames {
+        write_frame(&mut log, sc, f)?;
+    }
+    let t_end = frames.last().map_or(0.0, |f| f.t);
+    log.write("/log", t_end, &json!({"timestamp": stamp(t_end), "level": 2, "message": format!("{} frames", frames.len()), "name": "qrm sim", "file": "", "line": 0}))?;
+    log.finish()
+}
+
+/// The world (landmarks, walls, clutter) on `/world` and a start event on `/log`, at t = 0.
+pub fn write_world(log: &mut McapLog, sc: &sim2d::Scenario) -> Result<()> {
     let spec = sc.world.spec();
     let mut entities = Vec::new();
     for l in &spec.landmarks {
@@ -182,7 +193,12 @@ fn write_log(path: &std::path::Path, sc: &sim2d::Scenario, frames: &[sim2d::Fram
         &json!({"deletions": [], "entities": entities}),
     )?;
     log.write("/log", 0.0, &json!({"timestamp": stamp(0.0), "level": 2, "message": format!("scenario {} started", sc.name), "name": "qrm sim", "file": "", "line": 0}))?;
-    for f in frames {
+    Ok(())
+}
+
+/// One frame: the pose on `/tf`, the detections, the scan.
+pub fn write_frame(log: &mut McapLog, sc: &sim2d::Scenario, f: &sim2d::Frame) -> Result<()> {
+    {
         log.write(
             "/tf",
             f.t,
@@ -218,7 +234,5 @@ fn write_log(path: &std::path::Path, sc: &sim2d::Scenario, frames: &[sim2d::Fram
             )?;
         }
     }
-    let t_end = frames.last().map_or(0.0, |f| f.t);
-    log.write("/log", t_end, &json!({"timestamp": stamp(t_end), "level": 2, "message": format!("{} frames", frames.len()), "name": "qrm sim", "file": "", "line": 0}))?;
-    log.finish()
+    Ok(())
 }

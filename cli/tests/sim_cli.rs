@@ -5,46 +5,17 @@
 
 mod common;
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::Command;
 
 fn qrm(args: &[&str]) -> String {
     common::ok(args, "")
 }
 
-/// Builds the Go validator once; `None` (with a message) when Go or shared/ is missing outside CI.
-fn mcapcheck() -> Option<PathBuf> {
-    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../shared/tools/mcapcheck");
-    let exe = Path::new(env!("CARGO_TARGET_TMPDIR")).join("mcapcheck");
-    let have_go = Command::new("go")
-        .arg("version")
-        .output()
-        .is_ok_and(|o| o.status.success());
-    if !src.is_dir() || !have_go {
-        assert!(
-            std::env::var("CI").is_err(),
-            "CI must validate logs with the Go reader (go and shared/tools/mcapcheck needed)"
-        );
-        eprintln!("SKIPPED: Go MCAP validation (go or shared/tools/mcapcheck not found)");
-        return None;
-    }
-    if !exe.exists() {
-        let status = Command::new("go")
-            .args(["build", "-o"])
-            .arg(&exe)
-            .arg(".")
-            .current_dir(&src)
-            .status()
-            .unwrap();
-        assert!(status.success(), "building mcapcheck");
-    }
-    Some(exe)
-}
-
 #[test]
 fn every_scenario_writes_a_valid_log_and_a_mappable_csv() {
     let root = Path::new(env!("CARGO_TARGET_TMPDIR")).join("sim-cli");
-    let check = mcapcheck();
+    let check = common::mcapcheck();
     for sc in ["hallway", "pqrm-100", "qlink-200", "field"] {
         let out = root.join(sc);
         let mut args = vec![

@@ -51,3 +51,21 @@ def test_a_log_cut_midway_stays_readable_up_to_its_last_chunk(qrm_bin, tmp_path)
         except Exception:  # the cut chunk at the end: expected
             pass
     assert read > 20, f"only {read} messages recovered from the complete chunks"
+
+
+def test_the_demo_log_has_the_navigation_topics(qrm_bin, tmp_path):
+    subprocess.run([qrm_bin, "demo", "--out", str(tmp_path)], check=True, capture_output=True)
+    with open(tmp_path / "run.mcap", "rb") as f:
+        reader = make_reader(f)
+        summary = reader.get_summary()
+        schemas = {s.name for s in summary.schemas.values()}
+        assert {"qrm.Plan", "qrm.MapBeliefs", "qrm.ControllerState", "foxglove.SceneUpdate"} <= schemas
+        seen = {}
+        for schema, channel, message in reader.iter_messages(log_time_order=True):
+            body = json.loads(message.data)
+            seen.setdefault(channel.topic, []).append(body)
+    beliefs = seen["/map/beliefs"][0]["elements"]
+    assert beliefs and all(abs(sum(e["p"]) - 1.0) < 1e-9 for e in beliefs)
+    assert seen["/plan"][0]["goal"] == json.loads((tmp_path / "summary.json").read_text())["goal"]
+    assert len(seen["/controller"]) >= 1
+    assert any(e["id"] == "trajectory" for e in seen["/navigation"][0]["entities"])

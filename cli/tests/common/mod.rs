@@ -3,6 +3,7 @@
 #![allow(dead_code, clippy::unwrap_used)]
 
 use std::io::Write;
+use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};
 
 /// Runs `qrm` with `args`, feeding `stdin`.
@@ -32,4 +33,33 @@ pub fn ok(args: &[&str], stdin: &str) -> String {
         String::from_utf8_lossy(&out.stderr)
     );
     String::from_utf8(out.stdout).unwrap()
+}
+
+/// Builds the Go validator once; `None` (with a message) when Go or shared/ is missing outside CI.
+pub fn mcapcheck() -> Option<PathBuf> {
+    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../shared/tools/mcapcheck");
+    let exe = Path::new(env!("CARGO_TARGET_TMPDIR")).join("mcapcheck");
+    let have_go = Command::new("go")
+        .arg("version")
+        .output()
+        .is_ok_and(|o| o.status.success());
+    if !src.is_dir() || !have_go {
+        assert!(
+            std::env::var("CI").is_err(),
+            "CI must validate logs with the Go reader (go and shared/tools/mcapcheck needed)"
+        );
+        eprintln!("SKIPPED: Go MCAP validation (go or shared/tools/mcapcheck not found)");
+        return None;
+    }
+    if !exe.exists() {
+        let status = Command::new("go")
+            .args(["build", "-o"])
+            .arg(&exe)
+            .arg(".")
+            .current_dir(&src)
+            .status()
+            .unwrap();
+        assert!(status.success(), "building mcapcheck");
+    }
+    Some(exe)
 }

@@ -1,7 +1,7 @@
 //! # qrm-py — the native module `qrm._qrm` of the `qrm` Python package
 //!
 //! Thin by design: conversion (NumPy arrays in, NumPy arrays and plain Python data out) and
-//! error mapping only; every algorithm lives in `qsr-core`, `pqrm`, `sim2d` and `serge`. The typed public
+//! error mapping only; every algorithm lives in `qsr-core`, `pqrm`, `sim2d`, `serge` and `qlink`. The typed public
 //! package (`qrm/__init__.py`, `_qrm.pyi`, `py.typed`) sits in `python/qrm`.
 //!
 //! Errors: each Rust error kind maps to one exception class under `qrm.QrmError` (see
@@ -12,6 +12,7 @@
 mod calculus;
 mod errors;
 mod mapping;
+mod navigation;
 mod regions;
 mod simulation;
 
@@ -34,6 +35,8 @@ fn _qrm(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(regions::serge_run, m)?)?;
     m.add_function(wrap_pyfunction!(regions::serge_cross_validate, m)?)?;
     m.add_function(wrap_pyfunction!(regions::compose_cells, m)?)?;
+    m.add_function(wrap_pyfunction!(navigation::navigate, m)?)?;
+    m.add_function(wrap_pyfunction!(navigation::qlink_study, m)?)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())
 }

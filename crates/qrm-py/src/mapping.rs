@@ -64,7 +64,7 @@ fn truth_from_dict(truth: &BTreeMap<u32, (f64, f64)>) -> GroundTruth {
 /// A probabilistic qualitative relational map.
 #[pyclass(module = "qrm")]
 pub(crate) struct Pqrm {
-    inner: pqrm::Pqrm,
+    pub(crate) inner: pqrm::Pqrm,
 }
 
 #[pymethods]

@@ -331,6 +331,7 @@ impl Calculus {
     /// equal length; extra entries of the longer slices are ignored). No validation: the
     /// caller computed the points, as the mapper does when it derives all six orderings of a
     /// triplet from one normalised position.
+    #[inline] // so callers compiled for wider vectors (pqrm's AVX2 path) inline the loops
     pub fn classify_normalised_into(&self, xs: &[f64], ys: &[f64], out: &mut [u16]) {
         match &self.partition {
             Partition::Constraints(p) => p.classify_block(xs, ys, out),

@@ -4,7 +4,7 @@ Calculi (`Calculus`), probabilistic qualitative relational mapping (`Pqrm`), obs
 files (`read_observations`) and the thesis's Monte Carlo study, sharded for distributed runs
 (`monte_carlo_config`, `monte_carlo_shard`, `monte_carlo_aggregate`, `monte_carlo`); salient
 region maps and learned calculi (`serge`, `SalientRegionMap`, `compose_cells`,
-`serge_cross_validate`).
+`serge_cross_validate`); navigation with Q-Link (`navigate`, `qlink_study`).
 
 Every error is a `QrmError`; the subclasses say what kind (see the hierarchy in the stubs).
 """
@@ -50,6 +50,8 @@ __all__ = [
     "monte_carlo_aggregate",
     "monte_carlo_config",
     "monte_carlo_shard",
+    "navigate",
+    "qlink_study",
     "read_observations",
     "serge",
     "serge_cross_validate",
@@ -143,3 +145,40 @@ def serge_cross_validate(dataset: str, *, quick: bool = True, seed: int = 0) -> 
     test_log_likelihood, errors, points)."""
     records: List[Dict[str, Any]] = json.loads(_qrm.serge_cross_validate(dataset, quick, seed))
     return records
+
+
+def navigate(
+    positions: Mapping[int, Tuple[float, float]],
+    start: int,
+    goal: int,
+    *,
+    pqrm: Optional[Pqrm] = None,
+    calculus: Union[None, str, Calculus] = None,
+    range: float = 20.0,
+    map_range: Optional[float] = None,
+    beta: int = 1,
+    controller: str = "arc",
+    horizon: int = 4,
+    replan: bool = True,
+) -> Dict[str, Any]:
+    """Q-Link from landmark `start` to landmark `goal` (thesis chapter 4).
+
+    The world is point landmarks at `positions` seen within `range`. The map is `pqrm` (a
+    probabilistic map you built) or, without it, the exact map of `calculus` (a name or a
+    `Calculus`) that a robot of range `map_range` (default `range`) would record. Controllers:
+    arc, midpoint-sweep, closest-point, safe-search. Returns success, failure, plan_len,
+    replans, length, transit_length, bound (Proposition 2), trajectory and transitions.
+    """
+    calc = Calculus.builtin(calculus) if isinstance(calculus, str) else calculus
+    pos = {int(k): (float(v[0]), float(v[1])) for k, v in positions.items()}
+    out: Dict[str, Any] = json.loads(
+        _qrm.navigate(pos, start, goal, pqrm=pqrm, calculus=calc, range=range, map_range=map_range,
+                      beta=beta, controller=controller, horizon=horizon, replan=replan)
+    )
+    return out
+
+
+def qlink_study(trial: str = "all", *, quick: bool = True, pairs: Optional[int] = None, seed: int = 0) -> Dict[str, Any]:
+    """The §4.4.1 study (Table 4.1): `{"table": [...], "records": [...]}`."""
+    result: Dict[str, Any] = json.loads(_qrm.qlink_study(trial, quick, pairs, seed))
+    return result

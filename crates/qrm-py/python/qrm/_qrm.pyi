@@ -26,6 +26,8 @@ __all__ = [
     "serge_run",
     "serge_cross_validate",
     "compose_cells",
+    "navigate",
+    "qlink_study",
     "__version__",
 ]
 
@@ -167,3 +169,18 @@ def serge_run(
 ) -> SalientRegionMap: ...
 def serge_cross_validate(dataset: str, quick: bool, seed: int) -> str: ...
 def compose_cells(calculus: Calculus) -> Dict[str, Dict[str, List[str]]]: ...
+def navigate(
+    positions: Dict[int, Tuple[float, float]],
+    start: int,
+    goal: int,
+    *,
+    pqrm: Optional[Pqrm] = None,
+    calculus: Optional[Calculus] = None,
+    range: float = 20.0,
+    map_range: Optional[float] = None,
+    beta: int = 1,
+    controller: str = "arc",
+    horizon: int = 4,
+    replan: bool = True,
+) -> str: ...
+def qlink_study(trial: str, quick: bool, pairs: Optional[int], seed: int) -> str: ...

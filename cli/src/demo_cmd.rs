@@ -1,0 +1,411 @@
+//! `qrm demo`: the whole pipeline in one run — simulate a robot mapping the field site with
+//! its lidar, build the probabilistic qualitative map, learn a calculus with SERGE, and
+//! navigate to a goal with Q-Link; write an MCAP log for Foxglove, a summary and a picture.
+
+use std::collections::BTreeMap;
+use std::path::PathBuf;
+use std::time::Instant;
+
+use anyhow::{Context, Result, bail};
+use pqrm::{LandmarkId, Observation, Pqrm, PqrmConfig, Scan};
+use qlink::{
+    Controller, ControllerKind, Layer, LinkGraph, NavConfig, Navigator, QualitativeMap,
+    SearchPomdp, WorldPerception,
+};
+use qsr_core::Calculus;
+use serde_json::{Value, json};
+use serge::learn::{TripletObservation, triplet_beliefs};
+use serge::{CellMasses, Grid, Serge, SergeParams};
+
+use crate::mcap_log::{McapLog, stamp, yaw};
+use crate::output::write_atomic;
+
+/// `qrm demo`.
+#[derive(Debug, clap::Args)]
+pub struct DemoArgs {
+    /// Seed of the world, the sensors and the sampler.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Goal landmark (default: the mapped landmark farthest from the start).
+    #[arg(long)]
+    pub goal: Option<u32>,
+    /// Sensor range of the navigating robot (m); the mapping robot's lidar reaches 60 m, a
+    /// shorter range makes the navigation use more map elements.
+    #[arg(long, default_value_t = 30.0)]
+    pub nav_range: f64,
+    /// Output directory.
+    #[arg(long, default_value = "out/demo")]
+    pub out: PathBuf,
+}
+
+const PLAN_SCHEMA: &str = r#"{"title": "qrm.Plan", "description": "A Q-Link plan: map elements (landmark triplets) from start to goal", "type": "object",
+ "properties": {"timestamp": {"type": "object"}, "goal": {"type": "integer"}, "cost": {"type": "number"},
+  "elements": {"type": "array", "items": {"type": "object", "properties": {"id": {"type": "integer"}, "landmarks": {"type": "array"}, "calculus": {"type": "string"}}}}}}"#;
+const BELIEFS_SCHEMA: &str = r#"{"title": "qrm.MapBeliefs", "description": "PQRM beliefs: per map element, its calculus and the distribution over states of its first ordering", "type": "object",
+ "properties": {"timestamp": {"type": "object"}, "elements": {"type": "array", "items": {"type": "object", "properties": {
+  "landmarks": {"type": "array"}, "calculus": {"type": "string"}, "states": {"type": "array"}, "p": {"type": "array"}, "entropy": {"type": "number"}}}}}}"#;
+const CONTROLLER_SCHEMA: &str = r#"{"title": "qrm.ControllerState", "description": "One Q-Link transition: the link searched for, the POMDP commands (target states) and the outcome", "type": "object",
+ "properties": {"timestamp": {"type": "object"}, "from": {"type": "integer"}, "to": {"type": "integer"}, "link": {"type": "integer"},
+  "commands": {"type": "array"}, "success": {"type": "boolean"}, "length": {"type": "number"}}}"#;
+
+/// Runs the demo.
+pub fn run(a: DemoArgs) -> Result<()> {
+    let t0 = Instant::now();
+    // 1. the mapping drive with the lidar; landmarks recognised by triangles, no ids given
+    let sc = sim2d::scenario("field", a.seed, None)?;
+    let mut frames = sc.run(a.seed, true)?;
+    let mut det = sim2d::LidarDetector::new(0.3, 0.7);
+    // recognised id → world landmark (first recognition), so the navigating robot can be
+    // simulated; clutter recognised as landmarks stays in the map under its own id
+    let mut assoc: BTreeMap<u32, u32> = BTreeMap::new();
+    for f in &mut frames {
+        let Some(scan) = &f.scan else { continue };
+        let found = det.detect(scan);
+        for (d, hit) in &found {
+            if let Some(sim2d::Hit::Landmark(i)) = hit {
+                assoc
+                    .entry(d.id)
+                    .or_insert(sc.world.spec().landmarks[*i].id);
+            }
+        }
+        f.detections = found
+            .into_iter()
+            .filter_map(|(mut d, _)| {
+                let id = *assoc.get(&d.id)?;
+                d.id = id;
+                Some(d)
+            })
+            .collect();
+    }
+    let t_sim = t0.elapsed().as_secs_f64();
+    // 2. the PQRM (flip-flop calculus, N(0, 0.7) as in §4.4.2)
+    let scans: Vec<Scan> = frames
+        .iter()
+        .filter(|f| f.detections.len() >= 3)
+        .map(|f| {
+            let mut seen = std::collections::BTreeSet::new();
+            let obs = f
+                .detections
+                .iter()
+                .filter(|d| seen.insert(d.id))
+                .map(|d| Observation::new(LandmarkId(d.id), d.xy, [[0.49, 0.0], [0.0, 0.49]]))
+                .collect::<std::result::Result<Vec<_>, _>>()?;
+            Ok(Scan::new(f.t, 0, obs)?)
+        })
+        .collect::<Result<_>>()?;
+    if scans.is_empty() {
+        bail!("the mapping drive recognised no three landmarks at once");
+    }
+    let config = PqrmConfig {
+        samples: 300,
+        seed: a.seed,
+        ..PqrmConfig::default()
+    };
+    let mut flip = Pqrm::new(Calculus::builtin("left-right")?, config)?;
+    for s in &scans {
+        flip.update(s)?;
+    }
+    // 3. SERGE learns a calculus from the triplets the robot saw
+    let t1 = Instant::now();
+    let mut count: BTreeMap<[u32; 3], usize> = BTreeMap::new();
+    for s in &scans {
+        let ids: Vec<u32> = s.observations.iter().map(|o| o.id.0).collect();
+        for i in 0..ids.len() {
+            for j in i + 1..ids.len() {
+                for k in j + 1..ids.len() {
+                    *count.entry([ids[i], ids[j], ids[k]]).or_insert(0) += 1;
+                }
+            }
+        }
+    }
+    let mut triplets: Vec<[u32; 3]> = count
+        .into_iter()
+        .filter(|&(_, n)| n >= 4)
+        .map(|(t, _)| t)
+        .collect();
+    triplets.truncate(30);
+    let mut obs = Vec::new();
+    for s in &scans {
+        let get = |id: u32| s.observations.iter().find(|o| o.id.0 == id);
+        for (k, t) in triplets.iter().enumerate() {
+            if let (Some(d), Some(e), Some(f)) = (get(t[0]), get(t[1]), get(t[2])) {
+                obs.push(TripletObservation {
+                    triplet: k,
+                    points: [d.mean, e.mean, f.mean],
+                    cov: [d.cov, e.cov, f.cov],
+                });
+            }
+        }
+    }
+    let learned = if triplets.len() >= 2 {
+        let beliefs = triplet_beliefs(&obs, triplets.len(), 1000, a.seed)?;
+        let masses = CellMasses::compute(&beliefs, Grid::new([-3.0, 3.0, -2.5, 3.5], 48, 48)?)?;
+        let map =
+            Serge::new(&masses)?.run(&SergeParams::new(6.min(triplets.len()), 2.0).seed(a.seed))?;
+        Some(map.to_calculus(
+            "demo-learned",
+            "learned by SERGE from the demo's mapping drive",
+        )?)
+    } else {
+        None
+    };
+    let t_serge = t1.elapsed().as_secs_f64();
+    let mut layers = vec![Layer::Probabilistic(flip)];
+    if let Some(c) = &learned {
+        let mut m = Pqrm::new(c.clone(), config)?;
+        for s in &scans {
+            m.update(s)?;
+        }
+        layers.push(Layer::Probabilistic(m));
+    }
+    let map = QualitativeMap::new(layers)?;
+    // 4. Q-Link: β = 2, −log P costs from the horizon-4 POMDP, midpoint-and-sweep, re-planning
+    let pomdps: Vec<SearchPomdp> = map
+        .layers()
+        .iter()
+        .map(|l| SearchPomdp::new(l.calculus(), true, 0.9, 0.9, 4))
+        .collect::<std::result::Result<_, _>>()?;
+    let cost = qlink::graph::pomdp_cost(&map, &pomdps, qlink::CostModel::NegLogSuccess);
+    let graph = LinkGraph::new(&map, 1, cost)?;
+    if a.nav_range.is_nan() || a.nav_range <= 0.0 {
+        bail!("--nav-range must be positive");
+    }
+    let range = a.nav_range;
+    let nav_config = NavConfig {
+        controller: Controller::new(ControllerKind::MidpointSweep, range),
+        pomdp: pomdps[0].clone(),
+        step: 1.0,
+        replan: true,
+        max_replans: 3,
+        map_range: sc.detector.range,
+    };
+    let perception = WorldPerception::new(&sc.world, range);
+    // start where the mapping robot first recognised three landmarks at once
+    let start = frames
+        .iter()
+        .find(|f| f.detections.len() >= 3)
+        .map_or([sc.start.x, sc.start.y], |f| [f.pose.x, f.pose.y]);
+    // goal: the mapped landmark farthest from the start that the link graph can reach
+    let goal = match a.goal {
+        Some(g) => g,
+        None => {
+            let starts = map.elements_in_view(&qlink::Perception::visible(&perception, start));
+            let mut cands: Vec<(u32, f64)> = map
+                .landmarks()
+                .into_iter()
+                .filter_map(|l| {
+                    let p = sc.world.spec().landmarks.iter().find(|x| x.id == l)?.pos;
+                    Some((l, (p[0] - start[0]).hypot(p[1] - start[1])))
+                })
+                .collect();
+            cands.sort_by(|x, y| y.1.total_cmp(&x.1));
+            cands
+                .iter()
+                .find(|(l, _)| graph.plan(&map, &starts, *l, &Default::default()).is_ok())
+                .or(cands.first())
+                .map(|x| x.0)
+                .context("no landmark in the map")?
+        }
+    };
+    let t2 = Instant::now();
+    let nav = Navigator::new(&map, &graph, &perception, &nav_config)?;
+    let outcome = nav.navigate(start, goal, None, true)?;
+    let t_nav = t2.elapsed().as_secs_f64();
+    // 5. outputs
+    std::fs::create_dir_all(&a.out).with_context(|| format!("creating {}", a.out.display()))?;
+    let t_end_map = frames.last().map_or(0.0, |f| f.t);
+    write_log(&a, &sc, &frames, &map, &outcome, goal, t_end_map)?;
+    if let Some(c) = &learned {
+        write_atomic(
+            &a.out.join("learned_calculus.json"),
+            c.spec().to_json_string()?.as_bytes(),
+        )?;
+    }
+    let traj: Vec<(f64, f64)> = outcome.trajectory.iter().map(|p| (p[0], p[1])).collect();
+    let links: Vec<crate::plot::Segment> = outcome
+        .transitions
+        .iter()
+        .filter_map(|t| {
+            let p = sc
+                .world
+                .spec()
+                .landmarks
+                .iter()
+                .find(|l| l.id == t.link)?
+                .pos;
+            let q = outcome.trajectory.first()?;
+            Some(((q[0], q[1]), (p[0], p[1])))
+        })
+        .take(0)
+        .collect();
+    crate::plot::scenario_map(
+        &a.out.join("demo"),
+        &format!(
+            "Q-Link to landmark {goal}: {} ({} transitions, {:.0} m)",
+            if outcome.success { "reached" } else { "failed" },
+            outcome.transitions.len(),
+            outcome.length
+        ),
+        sc.world.spec(),
+        &traj,
+        &links,
+    )?;
+    let summary = json!({
+        "seed": a.seed,
+        "scenario": "field",
+        "frames": frames.len(),
+        "recognised_landmarks": assoc.len(),
+        "map_elements": map.elements().len(),
+        "link_graph_edges": graph.n_edges(),
+        "learned_calculus_states": learned.as_ref().map(Calculus::n_states),
+        "goal": goal,
+        "success": outcome.success,
+        "failure": outcome.failure,
+        "plan_len": outcome.plan_len,
+        "replans": outcome.replans,
+        "trajectory_length": outcome.length,
+        "prop2_bound": outcome.bound,
+        "transitions": outcome.transitions,
+        "seconds": {"simulate": t_sim, "serge": t_serge, "navigate": t_nav, "total": t0.elapsed().as_secs_f64()},
+    });
+    write_atomic(
+        &a.out.join("summary.json"),
+        serde_json::to_string_pretty(&summary)?.as_bytes(),
+    )?;
+    println!("qrm demo (seed {}):", a.seed);
+    println!(
+        "  mapped the field site with the lidar: {} frames, {} landmarks recognised, {} map elements",
+        frames.len(),
+        assoc.len(),
+        map.elements().len()
+    );
+    if let Some(c) = &learned {
+        println!(
+            "  SERGE learned a calculus with {} states from {} triplets ({t_serge:.1} s)",
+            c.n_states(),
+            triplets.len()
+        );
+    }
+    println!(
+        "  Q-Link to landmark {goal}: {} — |P| = {}, {} re-plans, {:.1} m driven (Prop. 2 bound {:.0} m)",
+        if outcome.success {
+            "reached"
+        } else {
+            "not reached"
+        },
+        outcome.plan_len,
+        outcome.replans,
+        outcome.length,
+        outcome.bound
+    );
+    println!(
+        "  wrote {} (open run.mcap in Foxglove) in {:.1} s",
+        a.out.display(),
+        t0.elapsed().as_secs_f64()
+    );
+    Ok(())
+}
+
+fn write_log(
+    a: &DemoArgs,
+    sc: &sim2d::Scenario,
+    frames: &[sim2d::Frame],
+    map: &QualitativeMap,
+    outcome: &qlink::NavOutcome,
+    goal: u32,
+    t_map: f64,
+) -> Result<()> {
+    let mut log = McapLog::create(&a.out.join("run.mcap"))?;
+    log.add_channel("/navigation", "foxglove.SceneUpdate", None)?;
+    log.add_channel("/plan", "qrm.Plan", Some(PLAN_SCHEMA))?;
+    log.add_channel("/map/beliefs", "qrm.MapBeliefs", Some(BELIEFS_SCHEMA))?;
+    log.add_channel(
+        "/controller",
+        "qrm.ControllerState",
+        Some(CONTROLLER_SCHEMA),
+    )?;
+    crate::sim_cmd::write_world(&mut log, sc)?;
+    for f in frames {
+        crate::sim_cmd::write_frame(&mut log, sc, f)?;
+    }
+    // the map's beliefs at the end of the mapping drive
+    let elements: Vec<Value> = map
+        .elements()
+        .iter()
+        .enumerate()
+        .map(|(i, e)| {
+            let [x, y, z] = e.landmarks;
+            let p = map.belief(i, [x, y, z]).unwrap_or_default();
+            let h: f64 = p.iter().filter(|&&q| q > 0.0).map(|q| -q * q.ln()).sum();
+            json!({"landmarks": e.landmarks, "calculus": map.calculus(i).name(), "states": map.calculus(i).labels(), "p": p, "entropy": h})
+        })
+        .collect();
+    log.write(
+        "/map/beliefs",
+        t_map,
+        &json!({"timestamp": stamp(t_map), "elements": elements}),
+    )?;
+    // navigation: poses, transitions, the trajectory and the plan's landmarks
+    let t_nav = t_map + 1.0;
+    let plan: Vec<Value> = outcome
+        .transitions
+        .iter()
+        .map(|t| json!({"id": t.to, "landmarks": map.elements()[t.to].landmarks, "calculus": map.calculus(t.to).name()}))
+        .collect();
+    log.write("/plan", t_nav, &json!({"timestamp": stamp(t_nav), "goal": goal, "cost": outcome.plan_len, "elements": plan}))?;
+    let speed = 1.0; // m/s along the trajectory
+    let mut t = t_nav;
+    let mut prev = outcome.trajectory.first().copied().unwrap_or([0.0, 0.0]);
+    let mut driven = 0.0;
+    let mut next_transition = 0usize;
+    for p in &outcome.trajectory {
+        let dl = (p[0] - prev[0]).hypot(p[1] - prev[1]);
+        t += dl / speed;
+        driven += dl;
+        let heading = (p[1] - prev[1]).atan2(p[0] - prev[0]);
+        log.write(
+            "/tf",
+            t,
+            &json!({"timestamp": stamp(t), "parent_frame_id": "world", "child_frame_id": "base_link",
+                    "translation": {"x": p[0], "y": p[1], "z": 0.0}, "rotation": yaw(heading)}),
+        )?;
+        // controller state when a transition ends
+        let mut acc: f64 = outcome.transitions[..next_transition]
+            .iter()
+            .map(|x| x.length)
+            .sum();
+        while let Some(tr) = outcome.transitions.get(next_transition) {
+            if driven + 1e-9 < acc + tr.length {
+                break;
+            }
+            acc += tr.length;
+            log.write(
+                "/controller",
+                t,
+                &json!({"timestamp": stamp(t), "from": tr.from, "to": tr.to, "link": tr.link, "commands": tr.commands, "success": tr.success, "length": tr.length}),
+            )?;
+            next_transition += 1;
+        }
+        prev = *p;
+    }
+    let points: Vec<Value> = outcome
+        .trajectory
+        .iter()
+        .map(|p| json!({"x": p[0], "y": p[1], "z": 0.2}))
+        .collect();
+    log.write(
+        "/navigation",
+        t,
+        &json!({"deletions": [], "entities": [{
+            "timestamp": stamp(t), "frame_id": "world", "id": "trajectory", "lifetime": stamp(0.0), "frame_locked": false,
+            "cylinders": [], "texts": [],
+            "lines": [{"type": 0, "pose": {"position": {"x": 0.0, "y": 0.0, "z": 0.0}, "orientation": yaw(0.0)}, "thickness": 0.4, "scale_invariant": false,
+                       "points": points, "color": {"r": 0.9, "g": 0.2, "b": 0.2, "a": 1.0}}]}]}),
+    )?;
+    log.write(
+        "/log",
+        t,
+        &json!({"timestamp": stamp(t), "level": 2, "message": format!("navigation to landmark {goal}: {}", if outcome.success { "reached" } else { "failed" }), "name": "qrm demo", "file": "", "line": 0}),
+    )?;
+    log.finish()
+}

@@ -1,0 +1,112 @@
+//! `qrm qlink study` and `qrm demo` end to end: Table 4.1's CSV in the documented form,
+//! Proposition 1 at R' = R, and the demo's MCAP log passing the Go reference reader.
+#![allow(clippy::unwrap_used)] // tests: a panic is the failure report
+
+mod common;
+
+use std::path::Path;
+use std::process::Command;
+
+#[test]
+fn quick_study_writes_table_4_1() {
+    let out = Path::new(env!("CARGO_TARGET_TMPDIR")).join("qlink-study");
+    let _ = std::fs::remove_dir_all(&out);
+    common::ok(
+        &[
+            "qlink",
+            "study",
+            "--quick",
+            "--pairs",
+            "60",
+            "--seed",
+            "2",
+            "--out",
+            out.to_str().unwrap(),
+        ],
+        "",
+    );
+    let table = std::fs::read_to_string(out.join("table.csv")).unwrap();
+    let mut lines = table.lines();
+    assert_eq!(
+        lines.next(),
+        Some("trial,value,pairs,no_path,failures,failure_rate")
+    );
+    let rows: Vec<Vec<String>> = lines
+        .map(|l| l.split(',').map(str::to_owned).collect())
+        .collect();
+    assert_eq!(rows.len(), 9);
+    let get = |trial: &str, value: &str| {
+        rows.iter()
+            .find(|r| r[0] == trial && r[1] == value)
+            .unwrap()
+            .clone()
+    };
+    // Proposition 1: R' = R without occlusion never fails
+    assert_eq!(get("sensor-range", "1")[4], "0");
+    // a shorter sensor fails more
+    let rate = |r: Vec<String>| r[5].parse::<f64>().unwrap();
+    assert!(rate(get("sensor-range", "0.6")) > rate(get("sensor-range", "0.9")));
+    for r in &rows {
+        assert_eq!(r[2], "60");
+    }
+    for f in [
+        "report.md",
+        "records.csv",
+        "fig4_6_plan_length_histogram.svg",
+        "fig4_7_length_vs_plan_length.png",
+    ] {
+        assert!(out.join(f).is_file(), "{f}");
+    }
+    let r = common::qrm(
+        &[
+            "qlink",
+            "study",
+            "--trial",
+            "nope",
+            "--out",
+            out.to_str().unwrap(),
+        ],
+        "",
+    );
+    assert!(!r.status.success());
+    assert!(String::from_utf8_lossy(&r.stderr).contains("unknown trial"));
+}
+
+#[test]
+fn the_demo_maps_learns_navigates_and_logs() {
+    let out = Path::new(env!("CARGO_TARGET_TMPDIR")).join("demo");
+    let _ = std::fs::remove_dir_all(&out);
+    let stdout = common::ok(&["demo", "--out", out.to_str().unwrap()], "");
+    assert!(stdout.contains("SERGE learned a calculus"), "{stdout}");
+    assert!(stdout.contains("reached"), "{stdout}");
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(summary["success"], true);
+    assert!(
+        summary["trajectory_length"].as_f64().unwrap() <= summary["prop2_bound"].as_f64().unwrap()
+    );
+    for f in ["run.mcap", "demo.svg", "demo.png", "learned_calculus.json"] {
+        assert!(out.join(f).is_file(), "{f}");
+    }
+    // the learned calculus is a calculus
+    common::ok(
+        &[
+            "calculus",
+            "show",
+            out.join("learned_calculus.json").to_str().unwrap(),
+        ],
+        "",
+    );
+    if let Some(check) = common::mcapcheck() {
+        let r = Command::new(check)
+            .arg(out.join("run.mcap"))
+            .output()
+            .unwrap();
+        let text = String::from_utf8_lossy(&r.stdout);
+        assert!(
+            r.status.success() && text.contains("OK:"),
+            "mcapcheck: {text}{}",
+            String::from_utf8_lossy(&r.stderr)
+        );
+    }
+}

@@ -1,0 +1,125 @@
+//! Q-Link from Python: navigate a qualitative map (a `qrm.Pqrm` or one built from surveyed
+//! positions) in a range-only simulated world, and the §4.4.1 study. Thin wrappers of
+//! `qlink`.
+
+use std::collections::BTreeMap;
+
+use pyo3::prelude::*;
+use qlink::{
+    Controller, ControllerKind, Layer, LinkGraph, NavConfig, Navigator, QlinkError, QualitativeMap,
+    RangePerception, SearchPomdp,
+};
+
+use crate::calculus::Calculus;
+use crate::errors::{InvalidInput, QrmError, invalid, pqrm, qsr};
+use crate::mapping::Pqrm;
+
+/// The Python exception for a Q-Link error.
+pub(crate) fn qlink_err(e: QlinkError) -> PyErr {
+    let msg = e.to_string();
+    match e {
+        QlinkError::Calculus(inner) => qsr(inner),
+        QlinkError::Pqrm(inner) => pqrm(inner),
+        QlinkError::Sim(_) => QrmError::new_err(msg),
+        QlinkError::UnknownLandmark(_)
+        | QlinkError::SameStartGoal(_)
+        | QlinkError::EmptyMap
+        | QlinkError::InvalidParameter(_) => InvalidInput::new_err(msg),
+        QlinkError::NoPath { .. } => QrmError::new_err(msg),
+        QlinkError::Unsupported(_) => crate::errors::UnsupportedError::new_err(msg),
+        _ => QrmError::new_err(msg),
+    }
+}
+
+/// Navigates from landmark `start` to landmark `goal` in a world of point landmarks
+/// (`positions`: id → (x, y)) seen within `range`, with a map that is either `pqrm` or —
+/// when it is None — the exact QRM of `calculus` a robot of range `map_range` would record.
+/// Returns the outcome as a dict (success, failure, plan_len, replans, length,
+/// transit_length, bound, trajectory, transitions).
+#[pyfunction]
+#[pyo3(signature = (positions, start, goal, *, pqrm = None, calculus = None, range = 20.0, map_range = None, beta = 1, controller = "arc", horizon = 4, replan = true))]
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn navigate(
+    py: Python<'_>,
+    positions: BTreeMap<u32, (f64, f64)>,
+    start: u32,
+    goal: u32,
+    pqrm: Option<PyRef<'_, Pqrm>>,
+    calculus: Option<PyRef<'_, Calculus>>,
+    range: f64,
+    map_range: Option<f64>,
+    beta: usize,
+    controller: &str,
+    horizon: usize,
+    replan: bool,
+) -> PyResult<String> {
+    if positions
+        .values()
+        .any(|p| !p.0.is_finite() || !p.1.is_finite())
+    {
+        return Err(invalid("a landmark position is not finite"));
+    }
+    let pos: BTreeMap<u32, [f64; 2]> = positions.iter().map(|(k, v)| (*k, [v.0, v.1])).collect();
+    let map_range = map_range.unwrap_or(range);
+    let layer = match (pqrm, calculus) {
+        (Some(m), _) => Layer::Probabilistic(m.inner.clone()),
+        (None, Some(c)) => {
+            Layer::exact_from_positions(c.inner.clone(), &pos, map_range).map_err(qlink_err)?
+        }
+        (None, None) => {
+            return Err(invalid(
+                "give the map: pqrm=... or calculus=... (an exact map from the positions)",
+            ));
+        }
+    };
+    let kind: ControllerKind = controller.parse().map_err(qlink_err)?;
+    let landmarks: Vec<(u32, [f64; 2])> = pos.into_iter().collect();
+    let json = py.detach(move || -> Result<String, QlinkError> {
+        let map = QualitativeMap::new(vec![layer])?;
+        let calc = map.layers()[0].calculus().clone();
+        let graph = LinkGraph::new(&map, beta, |_, _, _| 1.0)?;
+        let config = NavConfig {
+            controller: Controller::new(kind, range),
+            pomdp: SearchPomdp::new(&calc, false, 1.0, 0.9, horizon)?,
+            step: 0.5,
+            replan,
+            max_replans: 3,
+            map_range,
+        };
+        let perception = RangePerception::new(&landmarks, range);
+        let nav = Navigator::new(&map, &graph, &perception, &config)?;
+        let out = nav.navigate_between(start, goal, 0.5)?;
+        serde_json::to_string(&out).map_err(|e| QlinkError::InvalidParameter(e.to_string()))
+    });
+    json.map_err(qlink_err)
+}
+
+/// The §4.4.1 study (quick or full) for `trial` = sensor-range, occlusion or all; returns
+/// JSON `{"table": [...], "records": [...]}`.
+#[pyfunction]
+#[pyo3(signature = (trial, quick, pairs, seed))]
+pub(crate) fn qlink_study(
+    py: Python<'_>,
+    trial: &str,
+    quick: bool,
+    pairs: Option<usize>,
+    seed: u64,
+) -> PyResult<String> {
+    let trial = trial.to_owned();
+    py.detach(move || -> Result<String, QlinkError> {
+        let mut config = if quick {
+            qlink::study::StudyConfig::quick(seed)
+        } else {
+            qlink::study::StudyConfig::full(seed)
+        };
+        config.trial = trial;
+        if pairs.is_some() {
+            config.pairs = pairs;
+        }
+        let (records, _) = qlink::study::run_study(&config, &|_| {}, &|| {})?;
+        let table = qlink::study::table(&records);
+        serde_json::to_string(&serde_json::json!({"table": table, "records": records}))
+            .map_err(|e| QlinkError::InvalidParameter(e.to_string()))
+    })
+    .map_err(qlink_err)
+}
