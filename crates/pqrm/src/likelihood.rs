@@ -196,6 +196,11 @@ fn triplet_counts_portable(
     [i, j, k]: [usize; 3],
     orderings: Orderings,
 ) -> Result<Vec<Vec<u32>>> {
+    if orderings == Orderings::All
+        && let Some(forms) = SixForms::new(calculus)
+    {
+        return six_counts(calculus, &forms, samples, [i, j, k]);
+    }
     let q = calculus.n_states();
     let n_orders = if orderings == Orderings::All { 6 } else { 1 };
     // Four interleaved sub-histograms per ordering: consecutive samples mostly share a state,
@@ -266,6 +271,222 @@ fn triplet_counts_portable(
     Ok(counts
         .into_iter()
         .map(|c| c.into_iter().map(|l| l.iter().sum()).collect())
+        .collect())
+}
+
+/// The constraints of a line-and-circle calculus, rewritten for each of the six orderings
+/// as forms in the *base* frame of the unordered triplet.
+///
+/// Every constraint is `f(X, Y) = α(X² + Y²) + βX + γY + δ` (lines: α = 0). The orderings'
+/// positions are Möbius-like maps of the base position `(x, y)` (see [`step_counts`]), and
+/// multiplying `f(T(x, y))` by the positive factor 1, `n` or `m` turns each into a form
+/// `A·n + B·x + C·y + D` with `n = x² + y²` — the same sign, so the same side of the curve.
+/// The six classifications then need no divisions and no transformed points:
+///
+/// | ordering | A | B | C | D |
+/// |---|---|---|---|---|
+/// | `(x, y)` | α | β | γ | δ |
+/// | `(−x, 1 − y)` | α | −β | −2α − γ | α + γ + δ |
+/// | `(−x/n, y/n)` ×n | δ | −β | γ | α |
+/// | `(x/n, 1 − y/n)` ×n | α + γ + δ | β | −2α − γ | α |
+/// | `(x/m, (1 − y)/m)` ×m | δ | β | −γ − 2δ | α + γ + δ |
+/// | `(−x/m, (n − y)/m)` ×m | α + γ + δ | −β | −γ − 2δ | δ |
+struct SixForms {
+    /// The forms of each ordering, with their bits.
+    forms: [Vec<(Form, u32)>; 6],
+}
+
+/// One form, compiled. Most forms have a single term `±u + D` (`u` one of `n`, `x`, `y`);
+/// those are one comparison, `u ≥ −D` or `u ≤ D`, which is exact in IEEE arithmetic (a
+/// rounded sum is zero only when the exact sum is, and keeps its sign), so the result is the
+/// same as evaluating the form.
+#[derive(Debug, Clone, Copy)]
+enum Form {
+    /// `u ≥ t` (or `u > t` when not `inclusive`), `u` = `[n, x, y][var]`.
+    Above { var: usize, t: f64, inclusive: bool },
+    /// `u ≤ t` (or `u < t`).
+    Below { var: usize, t: f64, inclusive: bool },
+    /// `A·n + B·x + C·y + D ≥ 0` (or `> 0`).
+    General { coef: [f64; 4], inclusive: bool },
+}
+
+impl Form {
+    fn compile([a, b, c, d]: [f64; 4], inclusive: bool) -> Self {
+        let terms = [a, b, c];
+        let nonzero: Vec<usize> = (0..3).filter(|&i| terms[i] != 0.0).collect();
+        match nonzero.as_slice() {
+            [var] if terms[*var] == 1.0 => Self::Above {
+                var: *var,
+                t: -d,
+                inclusive,
+            },
+            [var] if terms[*var] == -1.0 => Self::Below {
+                var: *var,
+                t: d,
+                inclusive,
+            },
+            _ => Self::General {
+                coef: [a, b, c, d],
+                inclusive,
+            },
+        }
+    }
+}
+
+impl SixForms {
+    fn new(calculus: &Calculus) -> Option<Self> {
+        let qsr_core::Partition::Constraints(_) = calculus.partition() else {
+            return None;
+        };
+        let spec = calculus.spec();
+        if spec.constraints.len() > 8 {
+            return None; // 2^k sign-vector bins per ordering stay small (≤ 256)
+        }
+        let mut forms: [Vec<(Form, u32)>; 6] = Default::default();
+        for (k, c) in spec.constraints.iter().enumerate() {
+            let (al, be, ga, de) = match c.shape {
+                qsr_core::Shape::Line { a, b, c } => (0.0, a, b, c),
+                qsr_core::Shape::Circle { center, radius } => (
+                    1.0,
+                    -2.0 * center[0],
+                    -2.0 * center[1],
+                    center[0] * center[0] + center[1] * center[1] - radius * radius,
+                ),
+            };
+            let pos = c.zero == qsr_core::Side::Positive;
+            let rows = [
+                [al, be, ga, de],
+                [al, -be, -2.0 * al - ga, al + ga + de],
+                [de, -be, ga, al],
+                [al + ga + de, be, -2.0 * al - ga, al],
+                [de, be, -ga - 2.0 * de, al + ga + de],
+                [al + ga + de, -be, -ga - 2.0 * de, de],
+            ];
+            for (o, r) in rows.into_iter().enumerate() {
+                forms[o].push((Form::compile(r, pos), k as u32));
+            }
+        }
+        Some(Self { forms })
+    }
+}
+
+/// [`triplet_counts`] for all six orderings of a line-and-circle calculus via [`SixForms`].
+#[inline(always)]
+fn six_counts(
+    calculus: &Calculus,
+    forms: &SixForms,
+    samples: &ScanSamples,
+    [i, j, k]: [usize; 3],
+) -> Result<Vec<Vec<u32>>> {
+    let qsr_core::Partition::Constraints(partition) = calculus.partition() else {
+        return Err(PqrmError::InvalidConfig(
+            "six_counts needs a constraint calculus".into(),
+        ));
+    };
+    let table = partition.table();
+    let q = calculus.n_states();
+    // Histogram the sign vectors themselves (2^k bins, k ≤ 8 here) and map bins to states
+    // once at the end: the per-sample table lookup disappears from the hot loop.
+    let bins = table.len();
+    let mut counts = vec![vec![[0u32; 4]; bins]; 6];
+    let ((ax, ay), (bx, by), (cx, cy)) =
+        (samples.columns(i), samples.columns(j), samples.columns(k));
+    let s = samples.samples();
+    let mut xs = [0.0f64; CHUNK];
+    let mut ys = [0.0f64; CHUNK];
+    let mut ns = [0.0f64; CHUNK];
+    let mut v = [0u32; CHUNK];
+    let tol2 = qsr_core::DEGENERATE_TOLERANCE * qsr_core::DEGENERATE_TOLERANCE;
+    for start in (0..s).step_by(CHUNK) {
+        let len = CHUNK.min(s - start);
+        let mut valid = true;
+        for t in 0..len {
+            let u = start + t;
+            let (dx, dy) = (bx[u] - ax[u], by[u] - ay[u]);
+            let len2 = dx * dx + dy * dy;
+            let (vx, vy) = (cx[u] - ax[u], cy[u] - ay[u]);
+            let a2 = ax[u] * ax[u] + ay[u] * ay[u];
+            let b2 = bx[u] * bx[u] + by[u] * by[u];
+            let c2 = cx[u] * cx[u] + cy[u] * cy[u];
+            let inv = 1.0 / len2;
+            let x = -(dx * vy - dy * vx) * inv;
+            let y = (dx * vx + dy * vy) * inv;
+            let n = x * x + y * y;
+            let mm = x * x + (y - 1.0) * (y - 1.0);
+            valid &= (len2 > tol2 * (1.0 + a2 + b2))
+                & (n * len2 > tol2 * (1.0 + a2 + c2))
+                & (mm * len2 > tol2 * (1.0 + b2 + c2));
+            xs[t] = x;
+            ys[t] = y;
+            ns[t] = n;
+        }
+        if !valid {
+            return Err(PqrmError::CoincidentLandmarks {
+                set: [samples.ids()[i].0, samples.ids()[j].0, samples.ids()[k].0],
+                reason: "two of the three landmarks coincide in a sample (zero noise on one spot?)"
+                    .into(),
+            });
+        }
+        let (x, y, n) = (&xs[..len], &ys[..len], &ns[..len]);
+        for (o, c) in counts.iter_mut().enumerate() {
+            let bv = &mut v[..len];
+            bv.fill(0);
+            let vars = [n, x, y];
+            for &(form, bit) in &forms.forms[o] {
+                match form {
+                    Form::Above { var, t, inclusive } => {
+                        let pts = bv.iter_mut().zip(vars[var]);
+                        if inclusive {
+                            pts.for_each(|(vi, &u)| *vi |= u32::from(u >= t) << bit);
+                        } else {
+                            pts.for_each(|(vi, &u)| *vi |= u32::from(u > t) << bit);
+                        }
+                    }
+                    Form::Below { var, t, inclusive } => {
+                        let pts = bv.iter_mut().zip(vars[var]);
+                        if inclusive {
+                            pts.for_each(|(vi, &u)| *vi |= u32::from(u <= t) << bit);
+                        } else {
+                            pts.for_each(|(vi, &u)| *vi |= u32::from(u < t) << bit);
+                        }
+                    }
+                    Form::General {
+                        coef: [fa, fb, fc, fd],
+                        inclusive,
+                    } => {
+                        let pts = bv.iter_mut().zip(x).zip(y).zip(n);
+                        if inclusive {
+                            pts.for_each(|(((vi, &x), &y), &n)| {
+                                *vi |= u32::from(fa * n + fb * x + fc * y + fd >= 0.0) << bit;
+                            });
+                        } else {
+                            pts.for_each(|(((vi, &x), &y), &n)| {
+                                *vi |= u32::from(fa * n + fb * x + fc * y + fd > 0.0) << bit;
+                            });
+                        }
+                    }
+                }
+            }
+            let mut quads = bv.chunks_exact(4);
+            for quad in &mut quads {
+                for (lane, vi) in quad.iter().enumerate() {
+                    c[*vi as usize][lane] += 1;
+                }
+            }
+            for vi in quads.remainder() {
+                c[*vi as usize][0] += 1;
+            }
+        }
+    }
+    Ok(counts
+        .into_iter()
+        .map(|c| {
+            let mut out = vec![0u32; q];
+            for (bin, lanes) in c.iter().enumerate() {
+                out[usize::from(table[bin])] += lanes.iter().sum::<u32>();
+            }
+            out
+        })
         .collect())
 }
 
