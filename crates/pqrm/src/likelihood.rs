@@ -395,7 +395,8 @@ fn six_counts(
     let mut xs = [0.0f64; CHUNK];
     let mut ys = [0.0f64; CHUNK];
     let mut ns = [0.0f64; CHUNK];
-    let mut v = [0u32; CHUNK];
+    // u64 lanes: an f64 comparison yields a 64-bit mask, so no narrowing in the loops
+    let mut v = [0u64; CHUNK];
     let tol2 = qsr_core::DEGENERATE_TOLERANCE * qsr_core::DEGENERATE_TOLERANCE;
     for start in (0..s).step_by(CHUNK) {
         let len = CHUNK.min(s - start);
@@ -437,17 +438,17 @@ fn six_counts(
                     Form::Above { var, t, inclusive } => {
                         let pts = bv.iter_mut().zip(vars[var]);
                         if inclusive {
-                            pts.for_each(|(vi, &u)| *vi |= u32::from(u >= t) << bit);
+                            pts.for_each(|(vi, &u)| *vi |= u64::from(u >= t) << bit);
                         } else {
-                            pts.for_each(|(vi, &u)| *vi |= u32::from(u > t) << bit);
+                            pts.for_each(|(vi, &u)| *vi |= u64::from(u > t) << bit);
                         }
                     }
                     Form::Below { var, t, inclusive } => {
                         let pts = bv.iter_mut().zip(vars[var]);
                         if inclusive {
-                            pts.for_each(|(vi, &u)| *vi |= u32::from(u <= t) << bit);
+                            pts.for_each(|(vi, &u)| *vi |= u64::from(u <= t) << bit);
                         } else {
-                            pts.for_each(|(vi, &u)| *vi |= u32::from(u < t) << bit);
+                            pts.for_each(|(vi, &u)| *vi |= u64::from(u < t) << bit);
                         }
                     }
                     Form::General {
@@ -457,11 +458,11 @@ fn six_counts(
                         let pts = bv.iter_mut().zip(x).zip(y).zip(n);
                         if inclusive {
                             pts.for_each(|(((vi, &x), &y), &n)| {
-                                *vi |= u32::from(fa * n + fb * x + fc * y + fd >= 0.0) << bit;
+                                *vi |= u64::from(fa * n + fb * x + fc * y + fd >= 0.0) << bit;
                             });
                         } else {
                             pts.for_each(|(((vi, &x), &y), &n)| {
-                                *vi |= u32::from(fa * n + fb * x + fc * y + fd > 0.0) << bit;
+                                *vi |= u64::from(fa * n + fb * x + fc * y + fd > 0.0) << bit;
                             });
                         }
                     }
