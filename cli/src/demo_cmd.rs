@@ -265,6 +265,7 @@ pub fn run(a: DemoArgs) -> Result<()> {
         "replans": outcome.replans,
         "trajectory_length": outcome.length,
         "prop2_bound": outcome.bound,
+        "prop4_bound": outcome.bound_direct,
         "transitions": outcome.transitions,
         "seconds": {"simulate": t_sim, "serge": t_serge, "navigate": t_nav, "total": t0.elapsed().as_secs_f64()},
     });

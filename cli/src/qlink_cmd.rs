@@ -120,7 +120,7 @@ fn write_outputs(
     }
     write_atomic(&out.join("table.csv"), csv.as_bytes())?;
     let mut csv = String::from(
-        "trial,value,start,goal,plan_len,success,failure,length,transit_length,bound\n",
+        "trial,value,start,goal,plan_len,success,failure,length,transit_length,bound,bound_prop4\n",
     );
     for r in records {
         let failure = r.failure.map_or(String::new(), |f| {
@@ -131,7 +131,7 @@ fn write_outputs(
         });
         let _ = writeln!(
             csv,
-            "{},{},{},{},{},{},{},{:.3},{:.3},{:.3}",
+            "{},{},{},{},{},{},{},{:.3},{:.3},{:.3},{:.3}",
             r.trial,
             r.value,
             r.start,
@@ -141,7 +141,8 @@ fn write_outputs(
             failure,
             r.length,
             r.transit_length,
-            r.bound
+            r.bound,
+            r.bound_direct
         );
     }
     write_atomic(&out.join("records.csv"), csv.as_bytes())?;

@@ -8,7 +8,7 @@ POSTS = {1: (0.0, 0.0), 2: (6.0, 3.0), 3: (3.0, 8.0), 4: (11.0, 7.0), 5: (14.0, 
          6: (18.0, 9.0), 7: (23.0, 4.0), 8: (26.0, 11.0), 9: (30.0, 2.0)}
 
 
-@pytest.mark.parametrize("controller", ["arc", "closest-point", "safe-search"])
+@pytest.mark.parametrize("controller", ["arc", "closest-point", "safe-search", "direct"])
 def test_navigation_on_an_exact_map_reaches_the_goal(controller):
     out = qrm.navigate(POSTS, 1, 9, calculus="quadrant", range=12.0, controller=controller)
     assert out["success"], out["failure"]

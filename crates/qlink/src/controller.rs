@@ -10,6 +10,7 @@
 //! | [`ControllerKind::MidpointSweep`] | to the references' midpoint; the sensor sweeps `q` from there | §4.4.2 |
 //! | [`ControllerKind::ClosestPoint`] | straight to the closest point of `q` (a QP over the state's half-planes, clarabel) | §4.3.2 |
 //! | [`ControllerKind::SafeSearch`] | a tour of lattice points of `q` that keep both references within range | §4.4.1's proposed improvement |
+//! | [`ControllerKind::Direct`] | straight to the link landmark when it is in view (maps meeting Assumption 3; Proposition 4), else like the closest sampled point of `q` | §4.3.4 |
 //!
 //! [`circle`] is the full-circle search used when a command does not find the link.
 
@@ -34,6 +35,8 @@ pub enum ControllerKind {
     ClosestPoint,
     /// Cover the target state keeping the references in view.
     SafeSearch,
+    /// Drive straight to the link landmark when it is in view (Proposition 4).
+    Direct,
 }
 
 impl std::str::FromStr for ControllerKind {
@@ -44,8 +47,9 @@ impl std::str::FromStr for ControllerKind {
             "midpoint-sweep" => Ok(Self::MidpointSweep),
             "closest-point" => Ok(Self::ClosestPoint),
             "safe-search" => Ok(Self::SafeSearch),
+            "direct" => Ok(Self::Direct),
             _ => Err(QlinkError::InvalidParameter(format!(
-                "unknown controller `{s}` (arc, midpoint-sweep, closest-point, safe-search)"
+                "unknown controller `{s}` (arc, midpoint-sweep, closest-point, safe-search, direct)"
             ))),
         }
     }
@@ -149,6 +153,8 @@ impl Controller {
                 Ok(vec![robot, p])
             }
             ControllerKind::SafeSearch => Ok(self.safe_search(calculus, a, b, m, target, robot)),
+            // the navigator drives straight to a visible link; without one, head for the state
+            ControllerKind::Direct => Ok(self.nearest_sample(calculus, a, b, m, target, robot)),
         }
     }
 

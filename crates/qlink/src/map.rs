@@ -49,6 +49,32 @@ impl Layer {
         positions: &BTreeMap<u32, [f64; 2]>,
         range: f64,
     ) -> Result<Self> {
+        Self::exact_where(calculus, positions, |p| within_disc(p, range))
+    }
+
+    /// An exact layer of the triplets whose landmarks are pairwise at most `range` apart —
+    /// the restricted maps of §4.3.4 Assumption 3 (i), for which the direct controller and
+    /// Proposition 4's bound apply.
+    ///
+    /// # Errors
+    /// Frame errors for coincident landmarks.
+    pub fn exact_pairwise(
+        calculus: Calculus,
+        positions: &BTreeMap<u32, [f64; 2]>,
+        range: f64,
+    ) -> Result<Self> {
+        Self::exact_where(calculus, positions, |p| {
+            (p[0] - p[1]).norm() <= range
+                && (p[1] - p[2]).norm() <= range
+                && (p[2] - p[0]).norm() <= range
+        })
+    }
+
+    fn exact_where(
+        calculus: Calculus,
+        positions: &BTreeMap<u32, [f64; 2]>,
+        keep: impl Fn(&[Point2<f64>; 3]) -> bool,
+    ) -> Result<Self> {
         let ids: Vec<u32> = positions.keys().copied().collect();
         let mut states = BTreeMap::new();
         let p = |id: u32| {
@@ -58,7 +84,7 @@ impl Layer {
         for (i, &a) in ids.iter().enumerate() {
             for (j, &b) in ids.iter().enumerate().skip(i + 1) {
                 for &c in &ids[j + 1..] {
-                    if !within_disc(&[p(a), p(b), p(c)], range) {
+                    if !keep(&[p(a), p(b), p(c)]) {
                         continue;
                     }
                     for [x, y, z] in orderings([a, b, c]) {

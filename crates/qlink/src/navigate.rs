@@ -218,6 +218,9 @@ pub struct NavOutcome {
     pub transit_length: f64,
     /// Proposition 2's bound for the first plan, (2π + 1)·R·|P| (m).
     pub bound: f64,
+    /// Proposition 4's bound, R·|P| (m): valid for maps meeting Assumptions 3–4 with the
+    /// direct controller.
+    pub bound_direct: f64,
     /// Positions visited (every `step`).
     pub trajectory: Vec<[f64; 2]>,
     /// Transitions made.
@@ -236,6 +239,7 @@ impl NavOutcome {
             length: 0.0,
             transit_length: 0.0,
             bound: 0.0,
+            bound_direct: 0.0,
             trajectory: Vec::new(),
             transitions: Vec::new(),
         }
@@ -397,6 +401,7 @@ impl<'a, P: Perception> Navigator<'a, P> {
                 out.plan_len = plan.len();
                 out.bound =
                     (2.0 * std::f64::consts::PI + 1.0) * self.config.map_range * plan.len() as f64;
+                out.bound_direct = self.config.map_range * plan.len() as f64;
                 first = false;
             }
             let mut failed = None;
@@ -445,6 +450,24 @@ impl<'a, P: Perception> Navigator<'a, P> {
     fn localise(&self, w: &mut Walker<'_, P>, range: f64) -> Option<Vec<usize>> {
         let visible = self.perception.visible(w.pos);
         let starts = self.map.elements_in_view(&visible);
+        // The direct controller starts from an element of the landmark the robot stands at
+        // (Proposition 3's x_t = L_n): from there every landmark of the element is in view.
+        if self.config.controller.kind == crate::controller::ControllerKind::Direct
+            && let Some(&here) = visible.iter().find(|&&id| {
+                self.perception
+                    .position(id)
+                    .is_some_and(|p| d(p, w.pos) <= 1.0)
+            })
+        {
+            let own: Vec<usize> = starts
+                .iter()
+                .copied()
+                .filter(|&e| self.map.elements()[e].landmarks.contains(&here))
+                .collect();
+            if !own.is_empty() {
+                return Some(own);
+            }
+        }
         if !starts.is_empty() {
             return Some(starts);
         }
@@ -500,6 +523,21 @@ impl<'a, P: Perception> Navigator<'a, P> {
             rec.success = true;
             rec.length = w.length - start_len;
         };
+        // the direct controller (Proposition 4): a visible link is driven to in a straight
+        // line; at a landmark of M_j all of M_j is in view when Assumption 3 holds
+        if self.config.controller.kind == crate::controller::ControllerKind::Direct
+            && self.perception.sees(w.pos, link)
+            && let Some(pl) = self.perception.position(link)
+        {
+            // all the way to the link (not just until M_j is in view), so the next
+            // transition starts at a landmark again (Proposition 3)
+            rec.commands.push(usize::MAX);
+            w.walk(&[pl], &mut |_: &P, _| false);
+            if Self::in_frame(self.perception, map, j, w.pos) {
+                done(w, &mut rec);
+                return Ok(rec);
+            }
+        }
         if Self::in_frame(self.perception, map, j, w.pos) {
             done(w, &mut rec);
             return Ok(rec);

@@ -114,6 +114,9 @@ pub struct TrialRecord {
     pub transit_length: f64,
     /// Proposition 2's bound (m).
     pub bound: f64,
+    /// Proposition 4's bound R·|P| (m; it applies only to maps meeting Assumption 3, which
+    /// this one does not — reported for comparison).
+    pub bound_direct: f64,
 }
 
 /// The mapped world the study navigates.
@@ -275,6 +278,7 @@ fn run_pairs<P: Perception>(
                 length: outcome.length,
                 transit_length: outcome.transit_length,
                 bound: outcome.bound,
+                bound_direct: outcome.bound_direct,
             })
         })
         .collect()

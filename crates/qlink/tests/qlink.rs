@@ -434,3 +434,65 @@ fn pomdp_edge_costs_follow_eqs_4_2_to_4_4() {
     let g = LinkGraph::new(&map, 1, neg_log).unwrap();
     assert!(g.plan(&map, &[0], 4, &BTreeSet::new()).is_ok());
 }
+
+/// Worlds whose map elements have landmarks pairwise within R (Assumption 3) and a robot
+/// that drives straight lines (Assumption 4): with the direct controller every navigation
+/// succeeds and no transition sequence is longer than R·|P| (Proposition 4).
+#[test]
+fn proposition_4_holds_for_the_direct_controller() {
+    use rand::{RngExt, SeedableRng};
+    for seed in 0..3u64 {
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(100 + seed);
+        let positions: BTreeMap<u32, [f64; 2]> = (0..30u32)
+            .map(|i| {
+                (
+                    i,
+                    [rng.random_range(0.0..60.0), rng.random_range(0.0..60.0)],
+                )
+            })
+            .collect();
+        let range = 15.0;
+        let layer =
+            Layer::exact_pairwise(Calculus::builtin("quadrant").unwrap(), &positions, range)
+                .unwrap();
+        let map = QualitativeMap::new(vec![layer]).unwrap();
+        // every element is pairwise within R
+        for e in map.elements() {
+            for a in e.landmarks {
+                for b in e.landmarks {
+                    let (p, q) = (positions[&a], positions[&b]);
+                    assert!((p[0] - q[0]).hypot(p[1] - q[1]) <= range);
+                }
+            }
+        }
+        let g = LinkGraph::new(&map, 1, |_, _, _| 1.0).unwrap();
+        let landmarks: Vec<(u32, [f64; 2])> = positions.clone().into_iter().collect();
+        let perception = RangePerception::new(&landmarks, range);
+        let mut cfg = config(ControllerKind::Direct, range);
+        cfg.replan = false;
+        let nav = Navigator::new(&map, &g, &perception, &cfg).unwrap();
+        let mut runs = 0;
+        for s in 0..30u32 {
+            for t in (1..30u32).step_by(5) {
+                if s == t || map.elements_with(s).is_empty() || map.elements_with(t).is_empty() {
+                    continue;
+                }
+                // start exactly at the start landmark (Proposition 3's x_t = L_n)
+                let out = nav.navigate(positions[&s], t, None, false).unwrap();
+                if out.failure == Some(qlink::Failure::NoPath) {
+                    continue;
+                }
+                runs += 1;
+                assert!(out.success, "seed {seed}: {s} → {t}: {:?}", out.failure);
+                assert!(
+                    out.transit_length <= out.bound_direct + 1e-6,
+                    "{s} → {t}: {} > R·|P| = {}: {:?}",
+                    out.transit_length,
+                    out.bound_direct,
+                    out.transitions
+                );
+            }
+        }
+        assert!(runs > 30, "{runs}");
+    }
+}

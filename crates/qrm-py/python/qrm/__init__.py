@@ -166,8 +166,9 @@ def navigate(
     The world is point landmarks at `positions` seen within `range`. The map is `pqrm` (a
     probabilistic map you built) or, without it, the exact map of `calculus` (a name or a
     `Calculus`) that a robot of range `map_range` (default `range`) would record. Controllers:
-    arc, midpoint-sweep, closest-point, safe-search. Returns success, failure, plan_len,
-    replans, length, transit_length, bound (Proposition 2), trajectory and transitions.
+    arc, midpoint-sweep, closest-point, safe-search, direct. Returns success, failure, plan_len,
+    replans, length, transit_length, bound (Proposition 2), bound_direct (Proposition 4),
+    trajectory and transitions.
     """
     calc = Calculus.builtin(calculus) if isinstance(calculus, str) else calculus
     pos = {int(k): (float(v[0]), float(v[1])) for k, v in positions.items()}
