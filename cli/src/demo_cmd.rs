@@ -222,21 +222,27 @@ pub fn run(a: DemoArgs) -> Result<()> {
         )?;
     }
     let traj: Vec<(f64, f64)> = outcome.trajectory.iter().map(|p| (p[0], p[1])).collect();
-    let links: Vec<crate::plot::Segment> = outcome
-        .transitions
-        .iter()
-        .filter_map(|t| {
-            let p = sc
-                .world
-                .spec()
-                .landmarks
-                .iter()
-                .find(|l| l.id == t.link)?
-                .pos;
-            let q = outcome.trajectory.first()?;
-            Some(((q[0], q[1]), (p[0], p[1])))
-        })
-        .take(0)
+    // the plan's skeleton: start → each link landmark searched for → goal landmark
+    let pos_of = |id: u32| {
+        sc.world
+            .spec()
+            .landmarks
+            .iter()
+            .find(|l| l.id == id)
+            .map(|l| l.pos)
+    };
+    let mut chain: Vec<[f64; 2]> = vec![start];
+    chain.extend(
+        outcome
+            .transitions
+            .iter()
+            .filter(|t| t.success)
+            .filter_map(|t| pos_of(t.link)),
+    );
+    chain.extend(pos_of(goal));
+    let links: Vec<crate::plot::Segment> = chain
+        .windows(2)
+        .map(|w| ((w[0][0], w[0][1]), (w[1][0], w[1][1])))
         .collect();
     crate::plot::scenario_map(
         &a.out.join("demo"),

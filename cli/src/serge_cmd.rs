@@ -373,7 +373,7 @@ fn examples(dir: &Path, data: &Dataset, config: &StudyConfig) -> Result<(Vec<Exa
     }
     let extra = match data.name.as_str() {
         "lab" => resolution_tree_use_case(dir, &masses, config, &all_points)?,
-        "hallway" => learned_calculus(dir, data, &maps[0], config)?,
+        "hallway" => learned_calculus(dir, data, &maps[0])?,
         _ => String::new(),
     };
     Ok((out, extra))
@@ -458,12 +458,7 @@ fn resolution_tree_use_case(
     Ok(s)
 }
 
-fn learned_calculus(
-    dir: &Path,
-    data: &Dataset,
-    map: &SalientRegionMap,
-    config: &StudyConfig,
-) -> Result<String> {
+fn learned_calculus(dir: &Path, data: &Dataset, map: &SalientRegionMap) -> Result<String> {
     let t0 = Instant::now();
     let calc = map.to_calculus(
         "hallway-learned",
@@ -567,7 +562,6 @@ fn learned_calculus(
             labels.join(", ")
         );
     }
-    let _ = config;
     Ok(s)
 }
 

@@ -155,6 +155,36 @@ pub fn step_counts(
     Ok(all)
 }
 
+/// One sample of a triplet in its base normalised frame: `(x, y, n = x² + y²,
+/// m = x² + (y − 1)²)`, whether A and B are distinct, and whether C is distinct from both
+/// (relative to their magnitude; `|AC|² = n·|AB|²`, `|BC|² = m·|AB|²`). Shared by both
+/// counting paths so they normalise identically.
+#[inline(always)]
+fn base_sample(a: [f64; 2], b: [f64; 2], c: [f64; 2], tol2: f64) -> ([f64; 4], bool, bool) {
+    let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
+    let len2 = dx * dx + dy * dy;
+    let (vx, vy) = (c[0] - a[0], c[1] - a[1]);
+    let a2 = a[0] * a[0] + a[1] * a[1];
+    let b2 = b[0] * b[0] + b[1] * b[1];
+    let c2 = c[0] * c[0] + c[1] * c[1];
+    let inv = 1.0 / len2;
+    let x = -(dx * vy - dy * vx) * inv;
+    let y = (dx * vx + dy * vy) * inv;
+    let n = x * x + y * y;
+    let m = x * x + (y - 1.0) * (y - 1.0);
+    let ab = len2 > tol2 * (1.0 + a2 + b2);
+    let c_apart = (n * len2 > tol2 * (1.0 + a2 + c2)) & (m * len2 > tol2 * (1.0 + b2 + c2));
+    ([x, y, n, m], ab, c_apart)
+}
+
+/// The error for a triplet with two coincident landmarks in a sample.
+fn coincident(samples: &ScanSamples, [i, j, k]: [usize; 3]) -> PqrmError {
+    PqrmError::CoincidentLandmarks {
+        set: [samples.ids()[i].0, samples.ids()[j].0, samples.ids()[k].0],
+        reason: "two of the three landmarks coincide in a sample (zero noise on one spot?)".into(),
+    }
+}
+
 /// Histograms of the orderings of one unordered triplet (six, or one for
 /// [`Orderings::Canonical`]).
 ///
@@ -218,23 +248,13 @@ fn triplet_counts_portable(
         let mut valid = true;
         for t in 0..len {
             let u = start + t;
-            let (dx, dy) = (bx[u] - ax[u], by[u] - ay[u]);
-            let len2 = dx * dx + dy * dy;
-            let (vx, vy) = (cx[u] - ax[u], cy[u] - ay[u]);
-            let a2 = ax[u] * ax[u] + ay[u] * ay[u];
-            let b2 = bx[u] * bx[u] + by[u] * by[u];
-            let c2 = cx[u] * cx[u] + cy[u] * cy[u];
-            valid &= len2 > tol2 * (1.0 + a2 + b2);
-            let inv = 1.0 / len2;
-            let x = -(dx * vy - dy * vx) * inv;
-            let y = (dx * vx + dy * vy) * inv;
+            let ([x, y, n, mm], ab, c_apart) =
+                base_sample([ax[u], ay[u]], [bx[u], by[u]], [cx[u], cy[u]], tol2);
+            // the canonical ordering alone needs only A ≠ B; the others use C as a reference
+            valid &= ab & (c_apart | (n_orders == 1));
             px[0][t] = x;
             py[0][t] = y;
             if n_orders == 6 {
-                let n = x * x + y * y;
-                let mm = x * x + (y - 1.0) * (y - 1.0);
-                // |AC|² = n·|AB|², |BC|² = m·|AB|²: the same relative coincidence test.
-                valid &= (n * len2 > tol2 * (1.0 + a2 + c2)) & (mm * len2 > tol2 * (1.0 + b2 + c2));
                 let (inv_n, inv_m) = (1.0 / n, 1.0 / mm);
                 px[1][t] = -x;
                 py[1][t] = 1.0 - y;
@@ -249,11 +269,7 @@ fn triplet_counts_portable(
             }
         }
         if !valid {
-            return Err(PqrmError::CoincidentLandmarks {
-                set: [samples.ids()[i].0, samples.ids()[j].0, samples.ids()[k].0],
-                reason: "two of the three landmarks coincide in a sample (zero noise on one spot?)"
-                    .into(),
-            });
+            return Err(coincident(samples, [i, j, k]));
         }
         for (o, c) in counts.iter_mut().enumerate() {
             calculus.classify_normalised_into(&px[o][..len], &py[o][..len], &mut states[..len]);
@@ -403,30 +419,15 @@ fn six_counts(
         let mut valid = true;
         for t in 0..len {
             let u = start + t;
-            let (dx, dy) = (bx[u] - ax[u], by[u] - ay[u]);
-            let len2 = dx * dx + dy * dy;
-            let (vx, vy) = (cx[u] - ax[u], cy[u] - ay[u]);
-            let a2 = ax[u] * ax[u] + ay[u] * ay[u];
-            let b2 = bx[u] * bx[u] + by[u] * by[u];
-            let c2 = cx[u] * cx[u] + cy[u] * cy[u];
-            let inv = 1.0 / len2;
-            let x = -(dx * vy - dy * vx) * inv;
-            let y = (dx * vx + dy * vy) * inv;
-            let n = x * x + y * y;
-            let mm = x * x + (y - 1.0) * (y - 1.0);
-            valid &= (len2 > tol2 * (1.0 + a2 + b2))
-                & (n * len2 > tol2 * (1.0 + a2 + c2))
-                & (mm * len2 > tol2 * (1.0 + b2 + c2));
+            let ([x, y, n, _], ab, c_apart) =
+                base_sample([ax[u], ay[u]], [bx[u], by[u]], [cx[u], cy[u]], tol2);
+            valid &= ab & c_apart;
             xs[t] = x;
             ys[t] = y;
             ns[t] = n;
         }
         if !valid {
-            return Err(PqrmError::CoincidentLandmarks {
-                set: [samples.ids()[i].0, samples.ids()[j].0, samples.ids()[k].0],
-                reason: "two of the three landmarks coincide in a sample (zero noise on one spot?)"
-                    .into(),
-            });
+            return Err(coincident(samples, [i, j, k]));
         }
         let (x, y, n) = (&xs[..len], &ys[..len], &ns[..len]);
         for (o, c) in counts.iter_mut().enumerate() {

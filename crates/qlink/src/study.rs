@@ -16,7 +16,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::controller::{Controller, ControllerKind};
 use crate::error::{QlinkError, Result};
-use crate::graph::{CostModel, DistanceField, LinkGraph};
+use crate::graph::{DistanceField, LinkGraph};
 use crate::map::QualitativeMap;
 use crate::navigate::{
     Failure, NavConfig, NavOutcome, Navigator, Perception, RangePerception, WorldPerception,
@@ -390,9 +390,6 @@ pub fn table(records: &[TrialRecord]) -> Vec<TableRow> {
         })
         .collect()
 }
-
-/// The cost model used by the study (for reports).
-pub const STUDY_COSTS: CostModel = CostModel::Unit;
 
 /// A mapped world with its pairs and their goals' distance fields.
 type Prepared = (StudyWorld, Vec<(u32, u32)>, Vec<(u32, DistanceField)>);
