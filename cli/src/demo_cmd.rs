@@ -54,28 +54,21 @@ pub fn run(a: DemoArgs) -> Result<()> {
     // 1. the mapping drive with the lidar; landmarks recognised by triangles, no ids given
     let sc = sim2d::scenario("field", a.seed, None)?;
     let mut frames = sc.run(a.seed, true)?;
-    let mut det = sim2d::LidarDetector::new(0.3, 0.7);
     // recognised id → world landmark (first recognition), so the navigating robot can be
-    // simulated; clutter recognised as landmarks stays in the map under its own id
-    let mut assoc: BTreeMap<u32, u32> = BTreeMap::new();
+    // simulated; clutter recognised as a landmark is dropped
+    let assoc: BTreeMap<u32, u32> = sim2d::LidarDetector::new(0.3, 0.7)
+        .detect_frames(&mut frames)
+        .into_iter()
+        .map(|(id, i)| (id, sc.world.spec().landmarks[i].id))
+        .collect();
     for f in &mut frames {
-        let Some(scan) = &f.scan else { continue };
-        let found = det.detect(scan);
-        for (d, hit) in &found {
-            if let Some(sim2d::Hit::Landmark(i)) = hit {
-                assoc
-                    .entry(d.id)
-                    .or_insert(sc.world.spec().landmarks[*i].id);
+        f.detections.retain_mut(|d| match assoc.get(&d.id) {
+            Some(&world) => {
+                d.id = world;
+                true
             }
-        }
-        f.detections = found
-            .into_iter()
-            .filter_map(|(mut d, _)| {
-                let id = *assoc.get(&d.id)?;
-                d.id = id;
-                Some(d)
-            })
-            .collect();
+            None => false,
+        });
     }
     let t_sim = t0.elapsed().as_secs_f64();
     // 2. the PQRM (flip-flop calculus, N(0, 0.7) as in §4.4.2)

@@ -79,18 +79,11 @@ pub fn run(a: SimArgs) -> Result<()> {
     if lidar_detector {
         // Recognised ids are the detector's own; each is scored against the landmark it was
         // first recognised from (clutter has no truth and stays unscored).
-        truth.clear();
-        let mut det = sim2d::LidarDetector::new(0.3, 0.1);
-        for f in &mut frames {
-            let Some(scan) = &f.scan else { continue };
-            let found = det.detect(scan);
-            for (d, hit) in &found {
-                if let (Some(sim2d::Hit::Landmark(i)), false) = (hit, truth.contains_key(&d.id)) {
-                    truth.insert(d.id, sc.world.spec().landmarks[*i].pos);
-                }
-            }
-            f.detections = found.into_iter().map(|(d, _)| d).collect();
-        }
+        let first = sim2d::LidarDetector::new(0.3, 0.1).detect_frames(&mut frames);
+        truth = first
+            .into_iter()
+            .map(|(id, i)| (id, sc.world.spec().landmarks[i].pos))
+            .collect();
     }
     std::fs::create_dir_all(&a.out).with_context(|| format!("creating {}", a.out.display()))?;
     let mut csv = Vec::new();

@@ -379,6 +379,30 @@ pub struct LidarDetector {
 }
 
 impl LidarDetector {
+    /// Replaces every frame's detections by the ones extracted from its scan (frames without
+    /// a scan get none) and returns the landmark (index into the world spec) each recognised
+    /// id was *first* recognised from — the association a simulation scores against or uses
+    /// to simulate perception. Clutter recognised as a landmark has no entry.
+    pub fn detect_frames(
+        &mut self,
+        frames: &mut [crate::scenario::Frame],
+    ) -> std::collections::BTreeMap<u32, usize> {
+        let mut first = std::collections::BTreeMap::new();
+        for f in frames {
+            let found = match &f.scan {
+                Some(scan) => self.detect(scan),
+                None => Vec::new(),
+            };
+            for (d, hit) in &found {
+                if let Some(Hit::Landmark(i)) = hit {
+                    first.entry(d.id).or_insert(*i);
+                }
+            }
+            f.detections = found.into_iter().map(|(d, _)| d).collect();
+        }
+        first
+    }
+
     /// A detector with default extraction, recognition tolerance `tolerance` (m) and `sigma`.
     #[must_use]
     pub fn new(tolerance: f64, sigma: f64) -> Self {
