@@ -192,9 +192,17 @@ pub fn run(a: DemoArgs) -> Result<()> {
                 })
                 .collect();
             cands.sort_by(|x, y| y.1.total_cmp(&x.1));
+            // prefer a goal that needs at least one transition, so the demo navigates
+            let plan_len = |l: u32| {
+                graph
+                    .plan(&map, &starts, l, &Default::default())
+                    .ok()
+                    .map(|p| p.len())
+            };
             cands
                 .iter()
-                .find(|(l, _)| graph.plan(&map, &starts, *l, &Default::default()).is_ok())
+                .find(|(l, _)| plan_len(*l).is_some_and(|n| n >= 1))
+                .or_else(|| cands.iter().find(|(l, _)| plan_len(*l).is_some()))
                 .or(cands.first())
                 .map(|x| x.0)
                 .context("no landmark in the map")?
