@@ -26,7 +26,7 @@ pub struct DemoArgs {
     /// Seed of the world, the sensors and the sampler.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
-    /// Goal landmark (default: the mapped landmark farthest from the start).
+    /// Goal landmark (default: the nearest mapped landmark that needs a transition).
     #[arg(long)]
     pub goal: Option<u32>,
     /// Sensor range of the navigating robot (m); the mapping robot's lidar reaches 60 m, a
@@ -173,40 +173,57 @@ pub fn run(a: DemoArgs) -> Result<()> {
         map_range: sc.detector.range,
     };
     let perception = WorldPerception::new(&sc.world, range);
-    // start where the mapping robot first recognised three landmarks at once
-    let start = frames
-        .iter()
-        .find(|f| f.detections.len() >= 3)
-        .map_or([sc.start.x, sc.start.y], |f| [f.pose.x, f.pose.y]);
-    // goal: the mapped landmark farthest from the start that the link graph can reach
-    let goal = match a.goal {
-        Some(g) => g,
-        None => {
-            let starts = map.elements_in_view(&qlink::Perception::visible(&perception, start));
-            let mut cands: Vec<(u32, f64)> = map
+    // start and goal: along the mapping drive (every frame that recognised three landmarks
+    // at once, in order), the first start from which some reachable landmark needs at least
+    // one transition — the nearest such landmark is the goal (a short run; `--goal` picks another). (From the corridor entrance
+    // the posts and bollards frame elements holding almost every landmark.)
+    let plan_len = |starts: &[usize], l: u32| {
+        graph
+            .plan(&map, starts, l, &Default::default())
+            .ok()
+            .map(|p| p.len())
+    };
+    let pos_of_landmark = |l: u32| {
+        sc.world
+            .spec()
+            .landmarks
+            .iter()
+            .find(|x| x.id == l)
+            .map(|x| x.pos)
+    };
+    let mut choice: Option<([f64; 2], u32)> = None;
+    for f in frames.iter().filter(|f| f.detections.len() >= 3) {
+        let start = [f.pose.x, f.pose.y];
+        let starts = map.elements_in_view(&qlink::Perception::visible(&perception, start));
+        if starts.is_empty() {
+            continue;
+        }
+        let goal = match a.goal {
+            Some(g) => plan_len(&starts, g).is_some_and(|n| n >= 1).then_some(g),
+            None => map
                 .landmarks()
                 .into_iter()
+                .filter(|&l| plan_len(&starts, l).is_some_and(|n| n >= 1))
                 .filter_map(|l| {
-                    let p = sc.world.spec().landmarks.iter().find(|x| x.id == l)?.pos;
+                    let p = pos_of_landmark(l)?;
                     Some((l, (p[0] - start[0]).hypot(p[1] - start[1])))
                 })
-                .collect();
-            cands.sort_by(|x, y| y.1.total_cmp(&x.1));
-            // prefer a goal that needs at least one transition, so the demo navigates
-            let plan_len = |l: u32| {
-                graph
-                    .plan(&map, &starts, l, &Default::default())
-                    .ok()
-                    .map(|p| p.len())
-            };
-            cands
-                .iter()
-                .find(|(l, _)| plan_len(*l).is_some_and(|n| n >= 1))
-                .or_else(|| cands.iter().find(|(l, _)| plan_len(*l).is_some()))
-                .or(cands.first())
-                .map(|x| x.0)
-                .context("no landmark in the map")?
+                .min_by(|x, y| x.1.total_cmp(&y.1).then(x.0.cmp(&y.0)))
+                .map(|x| x.0),
+        };
+        if let Some(g) = goal {
+            choice = Some((start, g));
+            break;
         }
+    }
+    let (start, goal) = match (choice, a.goal) {
+        (Some(c), _) => c,
+        // nothing needs a transition: start where the drive began, any goal
+        (None, g) => (
+            [sc.start.x, sc.start.y],
+            g.or_else(|| map.landmarks().last().copied())
+                .context("no landmark in the map")?,
+        ),
     };
     let t2 = Instant::now();
     let nav = Navigator::new(&map, &graph, &perception, &nav_config)?;

@@ -9,6 +9,7 @@
 mod args;
 mod calculus_cmd;
 mod demo_cmd;
+mod field_cmd;
 mod mcap_log;
 mod output;
 mod plot;

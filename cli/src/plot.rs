@@ -490,6 +490,75 @@ where
     Ok(())
 }
 
+fn draw_runs<DB: DrawingBackend>(
+    root: &DrawingArea<DB, Shift>,
+    title: &str,
+    w: &sim2d::WorldSpec,
+    drive: &[(f64, f64)],
+    runs: &[(Vec<(f64, f64)>, bool)],
+) -> Drawn
+where
+    DB::ErrorType: 'static,
+{
+    draw_scenario(root, title, w, drive, &[])?;
+    // the same equal-scale chart as draw_scenario, drawn over it
+    let [x0, x1, y0, y1] = w.bounds;
+    let (dx, dy) = (x1 - x0, y1 - y0);
+    let aspect = f64::from(SIZE.0 - 60) / f64::from(SIZE.1 - 60);
+    let (cx, cy) = ((x0 + x1) / 2.0, (y0 + y1) / 2.0);
+    let (hx, hy) = if dx / dy > aspect {
+        (dx / 2.0, dx / aspect / 2.0)
+    } else {
+        (dy * aspect / 2.0, dy / 2.0)
+    };
+    let mut chart = ChartBuilder::on(root)
+        .margin(12)
+        .caption(" ", ("sans-serif", 20))
+        .x_label_area_size(30)
+        .y_label_area_size(40)
+        .build_cartesian_2d((cx - hx)..(cx + hx), (cy - hy)..(cy + hy))?;
+    for (i, (path, ok)) in runs.iter().enumerate() {
+        let colour = if *ok {
+            Palette99::pick(i).mix(0.8)
+        } else {
+            RGBColor(220, 30, 30).mix(0.9)
+        };
+        if *ok {
+            chart.draw_series(std::iter::once(PathElement::new(
+                path.clone(),
+                colour.stroke_width(2),
+            )))?;
+        } else {
+            // failures dashed, as in the thesis's Fig 4.9
+            chart.draw_series(
+                path.chunks(2)
+                    .step_by(2)
+                    .map(|c| PathElement::new(c.to_vec(), colour.stroke_width(2))),
+            )?;
+        }
+        if let Some(&(x, y)) = path.first() {
+            chart.draw_series(std::iter::once(Circle::new((x, y), 3, colour.filled())))?;
+        }
+    }
+    Ok(())
+}
+
+/// Navigation runs over a scenario's world: the mapping drive (blue), successful runs
+/// (solid, one colour each) and failed runs (dashed red), as in thesis Fig 4.9.
+pub fn runs_map(
+    stem: &Path,
+    title: &str,
+    world: &sim2d::WorldSpec,
+    drive: &[(f64, f64)],
+    runs: &[(Vec<(f64, f64)>, bool)],
+) -> Result<Vec<PathBuf>> {
+    both(
+        stem,
+        |r| draw_runs(r, title, world, drive, runs),
+        |r| draw_runs(r, title, world, drive, runs),
+    )
+}
+
 /// A scenario's world, the robot's true trajectory and some detection rays.
 pub fn scenario_map(
     stem: &Path,

@@ -16,6 +16,27 @@ pub enum QlinkCmd {
     /// The §4.4.1 simulation study: failure rate vs sensor range and landmark size
     /// (Table 4.1), |P| histogram (Fig 4.6), trajectory length vs |P| (Fig 4.7).
     Study(StudyArgs),
+    /// The §4.4.2 field-site experiment in simulation: a lidar-only hybrid map (point
+    /// triplets + the two walls), random start/goal trials, success rate, causes of failure,
+    /// Table 4.2, and the thesis's proposed improvements measured.
+    Field(FieldArgs),
+}
+
+/// `qrm qlink field`.
+#[derive(Debug, clap::Args)]
+pub struct FieldArgs {
+    /// Trials per variant (default 200; quick: 12).
+    #[arg(long)]
+    pub trials: Option<usize>,
+    /// Fewer trials, fewer samples and coarser checks: for tests.
+    #[arg(long)]
+    pub quick: bool,
+    /// Seed.
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    /// Output directory.
+    #[arg(long)]
+    pub out: PathBuf,
 }
 
 /// `qrm qlink study`.
@@ -42,6 +63,7 @@ pub struct StudyArgs {
 pub fn run(cmd: QlinkCmd) -> Result<()> {
     match cmd {
         QlinkCmd::Study(a) => study(a),
+        QlinkCmd::Field(a) => crate::field_cmd::run(a),
     }
 }
 

@@ -1,5 +1,6 @@
-//! `qrm qlink study` and `qrm demo` end to end: Table 4.1's CSV in the documented form,
-//! Proposition 1 at R' = R, and the demo's MCAP log passing the Go reference reader.
+//! `qrm qlink study`, `qrm qlink field` and `qrm demo` end to end: Table 4.1's CSV in the
+//! documented form, Proposition 1 at R' = R, the field experiment's outputs, and the demo's
+//! MCAP log passing the Go reference reader.
 #![allow(clippy::unwrap_used)] // tests: a panic is the failure report
 
 mod common;
@@ -109,4 +110,54 @@ fn the_demo_maps_learns_navigates_and_logs() {
             String::from_utf8_lossy(&r.stderr)
         );
     }
+}
+
+#[test]
+fn quick_field_experiment_writes_its_report() {
+    let out = Path::new(env!("CARGO_TARGET_TMPDIR")).join("qlink-field");
+    let _ = std::fs::remove_dir_all(&out);
+    common::ok(
+        &[
+            "qlink",
+            "field",
+            "--quick",
+            "--trials",
+            "5",
+            "--seed",
+            "1",
+            "--out",
+            out.to_str().unwrap(),
+        ],
+        "",
+    );
+    let trials = std::fs::read_to_string(out.join("trials.csv")).unwrap();
+    assert_eq!(trials.lines().count(), 1 + 4 * 5, "5 trials × 4 variants");
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    let variants = summary["variants"].as_array().unwrap();
+    assert_eq!(variants.len(), 4);
+    for v in variants {
+        let rate = v["success_rate"].as_f64().unwrap();
+        assert!((0.0..=1.0).contains(&rate), "{v}");
+    }
+    assert!(summary["mapping"]["wall_elements"].as_u64().unwrap() > 0);
+    let report = std::fs::read_to_string(out.join("report.md")).unwrap();
+    assert!(report.contains("72.2 %") && report.contains("Table 4.2"));
+    for f in ["table_4_2.csv", "fig_4_9_thesis.svg", "fig_4_9_thesis.png"] {
+        assert!(out.join(f).exists(), "{f}");
+    }
+    // bad input: zero trials is an error, not an empty report
+    let bad = common::qrm(
+        &[
+            "qlink",
+            "field",
+            "--trials",
+            "0",
+            "--out",
+            out.to_str().unwrap(),
+        ],
+        "",
+    );
+    assert!(!bad.status.success());
+    assert!(String::from_utf8_lossy(&bad.stderr).contains("at least 1"));
 }

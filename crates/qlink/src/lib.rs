@@ -13,7 +13,8 @@
 //!    midpoint-and-sweep, the closest point (a QP), or a safe search.
 //!
 //! [`Navigator`] runs the three with a [`Perception`] (range-only or sim2d's occlusion) and
-//! re-plans around failed transitions; [`study`] reproduces §4.4.1.
+//! re-plans around failed transitions; [`study`] reproduces §4.4.1 and [`field`] the
+//! lidar-only field-site experiment of §4.4.2.
 //!
 //! ## Why it is built this way
 //! - The map is an interface over layers (PQRM or exact), so hybrid maps of several calculi
@@ -35,6 +36,7 @@
 
 pub mod controller;
 mod error;
+pub mod field;
 pub mod graph;
 pub mod map;
 pub mod navigate;

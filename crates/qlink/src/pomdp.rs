@@ -95,6 +95,17 @@ impl SearchPomdp {
         Ok(p)
     }
 
+    /// The same POMDP with another probability of detecting the link when the robot is in
+    /// its state (e.g. one measured per landmark: visibility-aware edge costs).
+    ///
+    /// # Errors
+    /// [`QlinkError::InvalidParameter`] for a probability outside [0, 1].
+    pub fn with_p_detect(mut self, p_detect: f64) -> Result<Self> {
+        self.p_detect = p_detect;
+        self.validate()?;
+        Ok(self)
+    }
+
     fn validate(&self) -> Result<()> {
         for (name, v) in [
             ("p_move", self.p_move),

@@ -248,6 +248,7 @@ pub struct TriangleRecognizer {
     distances: std::collections::BTreeMap<(u32, u32), (f64, u32)>,
     next_id: u32,
     tolerance: f64,
+    min_votes: u32,
 }
 
 impl TriangleRecognizer {
@@ -258,7 +259,17 @@ impl TriangleRecognizer {
             distances: Default::default(),
             next_id: 0,
             tolerance,
+            min_votes: 1,
         }
+    }
+
+    /// The same recogniser accepting a known id only with at least `votes` matching
+    /// triangles (default 1). Two votes need four candidates in view but rule out most chance
+    /// matches of one triangle between distinct places.
+    #[must_use]
+    pub fn with_min_votes(mut self, votes: u32) -> Self {
+        self.min_votes = votes.max(1);
+        self
     }
 
     fn known(&self, a: u32, b: u32) -> Option<f64> {
@@ -269,6 +280,41 @@ impl TriangleRecognizer {
     /// Assigns an id to each candidate position of one frame (robot frame): known landmarks
     /// where triangles match, new ids otherwise. Learns the frame's distances.
     pub fn recognise(&mut self, positions: &[[f64; 2]]) -> Vec<u32> {
+        let n = positions.len();
+        let d = |i: usize, j: usize| {
+            (positions[i][0] - positions[j][0]).hypot(positions[i][1] - positions[j][1])
+        };
+        let out: Vec<u32> = self
+            .identify(positions)
+            .into_iter()
+            .map(|a| {
+                a.unwrap_or_else(|| {
+                    self.next_id += 1;
+                    self.next_id - 1
+                })
+            })
+            .collect();
+        for i in 0..n {
+            for j in i + 1..n {
+                let key = if out[i] < out[j] {
+                    (out[i], out[j])
+                } else {
+                    (out[j], out[i])
+                };
+                let e = self.distances.entry(key).or_insert((0.0, 0));
+                e.0 += d(i, j);
+                e.1 += 1;
+            }
+        }
+        out
+    }
+
+    /// Identifies candidates against the catalogue without changing it: the known landmark
+    /// each candidate's triangles vote for, `None` where no triangle matches. A navigating
+    /// robot identifies against its map this way; learning from its own (possibly wrong)
+    /// matches would let one id absorb ever more objects.
+    #[must_use]
+    pub fn identify(&self, positions: &[[f64; 2]]) -> Vec<Option<u32>> {
         let n = positions.len();
         let d = |i: usize, j: usize| {
             (positions[i][0] - positions[j][0]).hypot(positions[i][1] - positions[j][1])
@@ -331,6 +377,7 @@ impl TriangleRecognizer {
             .iter()
             .enumerate()
             .flat_map(|(c, v)| v.iter().map(move |(id, n)| (*n, c, *id)))
+            .filter(|p| p.0 >= self.min_votes)
             .collect();
         pairs.sort_by(|x, y| y.0.cmp(&x.0).then(x.1.cmp(&y.1)).then(x.2.cmp(&y.2)));
         let mut assigned: Vec<Option<u32>> = vec![None; n];
@@ -341,28 +388,7 @@ impl TriangleRecognizer {
                 used.insert(id);
             }
         }
-        let out: Vec<u32> = assigned
-            .into_iter()
-            .map(|a| {
-                a.unwrap_or_else(|| {
-                    self.next_id += 1;
-                    self.next_id - 1
-                })
-            })
-            .collect();
-        for i in 0..n {
-            for j in i + 1..n {
-                let key = if out[i] < out[j] {
-                    (out[i], out[j])
-                } else {
-                    (out[j], out[i])
-                };
-                let e = self.distances.entry(key).or_insert((0.0, 0));
-                e.0 += d(i, j);
-                e.1 += 1;
-            }
-        }
-        out
+        assigned
     }
 }
 

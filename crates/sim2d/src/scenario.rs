@@ -5,7 +5,7 @@
 //! | `pqrm-100` | 10 landmarks uniform in 100 m × 100 m (thesis §2.3.1) | one loop of radius 50 m about the centre, a frame every 16° | range 60 m, Cartesian σ = 5 m |
 //! | `qlink-200` | 200 landmarks uniform in 200 m × 200 m, at least 2 m apart, radius 0.3 m (§4.4.1; `with_landmark_radius` sets 0.1–0.7 m) | lawn-mower coverage, lanes 20 m apart | range 20 m, σ = 0.3 m, full occlusion |
 //! | `hallway` | two walls of point landmarks 6 m apart, one every 3 m (§3.4.1) | a straight drive down the middle | range 15 m, variance 0.1 m² |
-//! | `field` | a corridor between two long buildings (walls), a dense stand of pines, an open field with sparse posts and ground returns (§4.4.2) | a teleop-like path through all three | range 60 m, σ = 0.7 m |
+//! | `field` | a corridor between two long buildings (walls) with posts in front, bollards inside and trees by its end, a dense stand of pines, an open field with sparse posts and ground returns (§4.4.2) | a teleop-like path through all three | range 60 m, σ = 0.7 m |
 
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -219,6 +219,41 @@ pub fn scenario(name: &str, seed: u64, world: Option<WorldSpec>) -> Result<Scena
                     pos: [rng.random_range(90.0..150.0), rng.random_range(-30.0..30.0)],
                     radius: rng.random_range(0.3..1.0),
                 });
+            }
+            // Posts and bins in front of the buildings, bollards inside the corridor and a
+            // few trees by its far end, so the wall-pair relation has front, between and
+            // behind states (drawn last: the pines, posts and clutter above are unchanged).
+            let sides = |rng: &mut ChaCha8Rng| if rng.random::<bool>() { 1.0 } else { -1.0 };
+            for _ in 0..6 {
+                let side = sides(&mut rng);
+                landmarks.push(PointLandmark {
+                    id,
+                    pos: [
+                        rng.random_range(-16.0..-2.0),
+                        side * rng.random_range(9.0..14.0),
+                    ],
+                    radius: rng.random_range(0.3..0.45),
+                });
+                id += 1;
+            }
+            for k in 0..4 {
+                landmarks.push(PointLandmark {
+                    id,
+                    pos: [
+                        rng.random_range(4.0..36.0),
+                        if k % 2 == 0 { 5.5 } else { -5.5 },
+                    ],
+                    radius: 0.3,
+                });
+                id += 1;
+            }
+            for _ in 0..5 {
+                landmarks.push(PointLandmark {
+                    id,
+                    pos: [rng.random_range(44.0..56.0), rng.random_range(-14.0..14.0)],
+                    radius: rng.random_range(0.25..0.35),
+                });
+                id += 1;
             }
             // Remove pines overlapping each other (the detector assumes disjoint discs).
             let mut kept: Vec<PointLandmark> = Vec::new();

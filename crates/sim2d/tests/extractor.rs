@@ -118,3 +118,37 @@ fn walls_are_extracted_as_walls() {
     assert!(walls.len() >= 2, "{walls:?}");
     assert!(walls.iter().all(|w| matches!(w.truth, Some(Hit::Wall(_)))));
 }
+
+/// A navigating robot identifies against its map without changing it; two votes reject a
+/// chance match of a single triangle.
+#[test]
+fn identify_does_not_learn_and_two_votes_need_four_landmarks() {
+    let pts = [[0.0, 0.0], [4.0, 0.0], [0.0, 3.0], [5.0, 6.0]];
+    let mut r = TriangleRecognizer::new(0.1);
+    let ids = r.recognise(&pts);
+    assert_eq!(ids, vec![0, 1, 2, 3]);
+    // the same landmarks seen from elsewhere (translated and rotated by 90°)
+    let moved: Vec<[f64; 2]> = pts.iter().map(|p| [10.0 - p[1], 2.0 + p[0]]).collect();
+    let before = r.clone();
+    assert_eq!(r.identify(&moved), vec![Some(0), Some(1), Some(2), Some(3)]);
+    assert_eq!(
+        format!("{r:?}"),
+        format!("{before:?}"),
+        "identify learns nothing"
+    );
+    // unknown objects get no id
+    assert_eq!(
+        r.identify(&[[0.0, 0.0], [9.0, 0.0], [0.0, 7.0]]),
+        vec![None; 3]
+    );
+    // one triangle of the four matches: one vote each, enough by default only
+    let three = &moved[..3];
+    assert_eq!(r.identify(three), vec![Some(0), Some(1), Some(2)]);
+    let strict = r.clone().with_min_votes(2);
+    assert_eq!(strict.identify(three), vec![None; 3]);
+    assert_eq!(
+        strict.identify(&moved),
+        vec![Some(0), Some(1), Some(2), Some(3)],
+        "four landmarks make three triangles through each"
+    );
+}

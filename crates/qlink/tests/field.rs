@@ -1,0 +1,204 @@
+//! The §4.4.2 field experiment (`qlink::field`): the wall layer's calculus, the lidar-only
+//! map, navigation-time perception and the trials' bookkeeping.
+
+use qlink::Perception;
+use qlink::field::{
+    FieldParams, FieldResult, FieldVariant, LidarPerception, WALL_FRAME_END, WALL_FRAME_START,
+    map_field, run_field, summarise, tasks, wall_calculus,
+};
+use qsr_core::{Calculus, Point2, Segment};
+use rand::{RngExt, SeedableRng};
+
+/// The wall layer writes front / between / behind for a ternary frame over the walls'
+/// virtual frame points; it must agree with qsr-core's extended frame everywhere.
+#[test]
+fn wall_layer_calculus_equals_the_extended_frame() {
+    let ext = Calculus::builtin("front-between-behind").unwrap();
+    let ter = wall_calculus().unwrap();
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(3);
+    // the field's walls, oriented from the pines (x = 40) to the entrance (x = 0)
+    let w1 = Segment::new(Point2::new(40.0, -7.5), Point2::new(0.0, -7.5));
+    let w2 = Segment::new(Point2::new(40.0, 7.5), Point2::new(0.0, 7.5));
+    let (s, e) = (Point2::new(40.0, 0.0), Point2::new(0.0, 0.0));
+    let mut seen = [0usize; 3];
+    for _ in 0..20_000 {
+        let p = Point2::new(
+            rng.random_range(-60.0..100.0),
+            rng.random_range(-50.0..50.0),
+        );
+        let a = ext.classify_extended(w1, w2, p).unwrap();
+        let b = ter.classify_triplet(s, e, p).unwrap();
+        assert_eq!(ext.label(a), ter.label(b), "at {p:?}");
+        seen[a.index()] += 1;
+    }
+    assert!(
+        seen.iter().all(|&n| n > 1000),
+        "all three states drawn: {seen:?}"
+    );
+    // the pines are behind, the entrance is in front
+    let label = |x: f64| {
+        ter.label(ter.classify_triplet(s, e, Point2::new(x, 3.0)).unwrap())
+            .to_owned()
+    };
+    assert_eq!(label(60.0), "behind");
+    assert_eq!(label(20.0), "between");
+    assert_eq!(label(-10.0), "front");
+}
+
+#[test]
+fn the_lidar_only_map_is_a_hybrid_map_with_all_wall_states() {
+    let params = FieldParams::quick(0);
+    let f = map_field(&params).unwrap();
+    let s = &f.stats;
+    assert!(s.real_landmarks >= 15, "{s:?}");
+    assert!(s.point_elements > 100 && s.wall_elements > 10, "{s:?}");
+    assert_eq!(f.map.layers().len(), 2);
+    assert!(s.effective_range > 3.0 && s.effective_range < 30.0, "{s:?}");
+    // the recogniser's ids are not the world's: the truth table maps them to objects
+    assert!(f.truth.len() >= s.real_landmarks);
+    assert!(
+        (s.aliased_detections as f64) < 0.05 * s.detections as f64,
+        "two-vote triangle recognition rarely confuses objects: {s:?}"
+    );
+    // the wall layer's most likely states cover front, between and behind
+    let cal = f.map.layers()[1].calculus().clone();
+    let mut labels = std::collections::BTreeSet::new();
+    for e in f.map.elements().iter().filter(|e| e.layer == 1) {
+        let p = *e
+            .landmarks
+            .iter()
+            .find(|&&l| l != WALL_FRAME_START && l != WALL_FRAME_END)
+            .unwrap();
+        let b = f
+            .map
+            .belief(
+                f.map.elements().iter().position(|x| x == e).unwrap(),
+                [WALL_FRAME_START, WALL_FRAME_END, p],
+            )
+            .unwrap();
+        let ml = (0..b.len()).max_by(|&i, &j| b[i].total_cmp(&b[j])).unwrap();
+        labels.insert(cal.label(qsr_core::StateId(ml as u16)).to_owned());
+    }
+    assert_eq!(
+        labels.into_iter().collect::<Vec<_>>(),
+        ["behind", "between", "front"],
+        "posts in front, bollards between, trees and pines behind"
+    );
+}
+
+#[test]
+fn lidar_perception_sees_only_what_it_identifies() {
+    let params = FieldParams::quick(0);
+    let f = map_field(&params).unwrap();
+    let p = LidarPerception::new(&f, 1);
+    // in the corridor both walls are extracted: the walls' frame is in view
+    let v = p.visible([20.0, 0.0]);
+    assert!(
+        v.contains(&WALL_FRAME_START) && v.contains(&WALL_FRAME_END),
+        "{v:?}"
+    );
+    // far outside the site nothing is identified
+    assert!(p.visible([-200.0, -200.0]).is_empty());
+    // positions are measured: close to the true object of an identified id
+    let spec = f.scenario.world.spec();
+    let at = f.drive[f.drive.len() / 2];
+    let mut checked = 0;
+    for id in p.visible(at) {
+        if let (Some(sim2d::Hit::Landmark(i)), Some(pos)) = (f.truth.get(&id), p.position(id))
+            && p.last_consistent(id) == Some(true)
+        {
+            let t = spec.landmarks[*i].pos;
+            assert!(
+                (pos[0] - t[0]).hypot(pos[1] - t[1]) < 0.5,
+                "{id}: {pos:?} vs {t:?}"
+            );
+            checked += 1;
+        }
+    }
+    assert!(checked >= 2, "identified landmarks mid-drive: {checked}");
+    assert!((p.range() - f.stats.effective_range).abs() < 1e-12);
+}
+
+#[test]
+fn start_goal_draws_are_out_of_view_and_reachable() {
+    let params = FieldParams {
+        trials: 8,
+        ..FieldParams::quick(4)
+    };
+    let f = map_field(&params).unwrap();
+    let (ts, draws) = tasks(&f, &params).unwrap();
+    assert_eq!(ts.len(), 8);
+    assert_eq!(draws.kept, 8);
+    for t in &ts {
+        let p = LidarPerception::new(&f, 0);
+        assert!(!p.sees(t.start, t.goal));
+        assert!(matches!(
+            f.truth.get(&t.goal),
+            Some(sim2d::Hit::Landmark(_))
+        ));
+    }
+}
+
+/// Every trial is classified once; the summary adds up; the run does not depend on the
+/// number of threads.
+#[test]
+fn field_trials_are_deterministic_and_add_up() {
+    let params = FieldParams {
+        trials: 6,
+        ..FieldParams::quick(2)
+    };
+    let variants = [FieldVariant::Thesis, FieldVariant::Both];
+    let run = |threads: usize| {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap()
+            .install(|| run_field(&params, &variants, &|_| {}, &|| {}).unwrap())
+    };
+    let (_, d1, t1) = run(1);
+    let (_, d2, t2) = run(2);
+    assert_eq!(d1, d2);
+    assert_eq!(t1, t2);
+    let sums = summarise(&t1, &variants);
+    for s in &sums {
+        assert_eq!(s.trials, 6);
+        assert_eq!(
+            s.successes
+                + s.no_path
+                + s.perceptual_aliasing
+                + s.insufficient_features
+                + s.insufficient_features_and_aliasing,
+            6
+        );
+        let paths: usize = s.by_plan_len.iter().map(|r| r.1).sum();
+        assert_eq!(paths, s.successes);
+    }
+    for t in &t1 {
+        assert!(t.length.is_finite() && t.length >= 0.0);
+        if t.result == FieldResult::Success {
+            // it ended by the goal element: the goal was identified on the way
+            assert!(t.final_distance < 40.0, "{t:?}");
+            assert!(t.plan_len >= 1, "goals out of view need a transition");
+        }
+    }
+}
+
+#[test]
+fn bad_field_parameters_are_errors() {
+    for p in [
+        FieldParams {
+            trials: 0,
+            ..FieldParams::quick(0)
+        },
+        FieldParams {
+            sigma: f64::NAN,
+            ..FieldParams::quick(0)
+        },
+        FieldParams {
+            range_sigma: -1.0,
+            ..FieldParams::quick(0)
+        },
+    ] {
+        assert!(map_field(&p).is_err());
+    }
+}
