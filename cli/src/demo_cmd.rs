@@ -171,6 +171,7 @@ pub fn run(a: DemoArgs) -> Result<()> {
         replan: true,
         max_replans: 3,
         map_range: sc.detector.range,
+        find_goal: true,
     };
     let perception = WorldPerception::new(&sc.world, range);
     // start and goal: along the mapping drive (every frame that recognised three landmarks

@@ -217,8 +217,10 @@ fn report(
     let _ = writeln!(
         r,
         "## Success rate and causes of failure\n\n\
-         A success reaches an element holding the goal landmark with the goal truly being the \
-         goal (checked against the simulator). Starts are drawn within 8 m of the mapping \
+         A success reaches an element holding the goal landmark, finds the goal itself in that \
+         element's frame (POMDP search; an element where it is not found is given up and \
+         another planned to) and the object found truly is the goal (checked against the \
+         simulator). Starts are drawn within 8 m of the mapping \
          drive, goals among the map's real landmarks; a draw is redrawn when the goal (or an \
          element holding it) is in view at the start ({} draws), when the robot localises in \
          no element there ({}), or when the link graph has no path ({}; {} kept).\n\n\

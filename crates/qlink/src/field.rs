@@ -30,9 +30,13 @@
 //! effective range comes for free: a 0.2 m trunk gives 10 returns only within ≈ 9 m.
 //!
 //! β = 2, −log P(success) edge costs from horizon-4 POMDPs with direct transitions, the
-//! midpoint-and-sweep controller, contingency re-planning. A trial succeeds when the robot
-//! reaches an element holding the goal landmark *and* the object it took for the goal truly
-//! is the goal (checked against the simulator); it then drives to the element's centroid.
+//! midpoint-and-sweep controller, contingency re-planning. Arrival needs the goal landmark
+//! itself ([`NavConfig::find_goal`]): having reached the frame of an element holding the
+//! goal, the robot searches for the goal in that frame with the POMDP (the map's relation
+//! says where it is); an element in whose frame the goal is not found is given up and the
+//! robot re-plans to another. A trial succeeds when the object the robot took for the goal
+//! truly is the goal (checked against the simulator); it then drives to the element's
+//! centroid.
 //! Failures are classified as the thesis does: *perceptual aliasing* (the goal element was
 //! reached but on the wrong object) and *insufficient features* (nothing to localise or
 //! re-plan from), with the runs where aliasing also happened on the way marked.
@@ -995,6 +999,7 @@ pub fn nav_config(
         replan: true,
         max_replans: params.max_replans,
         map_range: field.scenario.lidar.max_range,
+        find_goal: true,
     }
 }
 

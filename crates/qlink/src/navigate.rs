@@ -169,6 +169,13 @@ pub struct NavConfig {
     pub max_replans: usize,
     /// Sensor range of the robot that made the map (R of Proposition 2).
     pub map_range: f64,
+    /// On reaching an element holding the goal, also search for the goal landmark itself in
+    /// the frame of the element's other two (the map's distribution over their relation
+    /// says where), and fail if it is not found. Off, reaching the element's frame is
+    /// arrival (§4.4.1); on, the robot must see its goal (the §4.4.2 field experiment, where
+    /// the recogniser, not the simulator, says what is seen).
+    #[serde(default)]
+    pub find_goal: bool,
 }
 
 /// Why a navigation failed.
@@ -372,13 +379,48 @@ impl<'a, P: Perception> Navigator<'a, P> {
             return Ok(self.finish(out, w));
         };
         let mut excluded: BTreeSet<(usize, usize)> = BTreeSet::new();
+        // goal elements in whose frame the goal was searched for and not found
+        let mut failed_goals: BTreeSet<usize> = BTreeSet::new();
         let mut first = true;
         loop {
-            if starts
+            starts.retain(|e| !failed_goals.contains(e));
+            if let Some(&e) = starts
                 .iter()
-                .any(|&e| self.map.elements()[e].landmarks.contains(&goal))
+                .find(|&&e| self.map.elements()[e].landmarks.contains(&goal))
             {
+                if self.config.find_goal && !self.perception.sees(w.pos, goal) {
+                    let mut commands = Vec::new();
+                    if !self.search_link(&mut w, e, goal, &mut commands)? {
+                        // a contingency like a failed transition: plan to another element
+                        // holding the goal, never back into this one
+                        if !self.config.replan || out.replans >= self.config.max_replans {
+                            out.failure = Some(Failure::InsufficientFeatures);
+                            break;
+                        }
+                        out.replans += 1;
+                        failed_goals.insert(e);
+                        for src in self.graph.graph().neighbors_directed(
+                            petgraph::graph::NodeIndex::new(e),
+                            petgraph::Direction::Incoming,
+                        ) {
+                            excluded.insert((src.index(), e));
+                        }
+                        match self.localise(&mut w, range) {
+                            Some(s) => starts = s,
+                            None => {
+                                out.failure = Some(Failure::InsufficientFeatures);
+                                break;
+                            }
+                        }
+                        first = false;
+                        continue;
+                    }
+                }
                 out.success = true;
+                break;
+            }
+            if starts.is_empty() {
+                out.failure = Some(Failure::InsufficientFeatures);
                 break;
             }
             let plan: Result<Plan> = match (first, field) {
@@ -416,8 +458,12 @@ impl<'a, P: Perception> Navigator<'a, P> {
             }
             match failed {
                 None => {
-                    out.success = true;
-                    break;
+                    // the plan's last element holds the goal: the check above ends the run
+                    let last = plan.elements.last().copied();
+                    starts = self.map.elements_in_view(&self.perception.visible(w.pos));
+                    starts.extend(last);
+                    starts.sort_unstable();
+                    starts.dedup();
                 }
                 Some(edge) => {
                     if !self.config.replan || out.replans >= self.config.max_replans {
@@ -498,6 +544,65 @@ impl<'a, P: Perception> Navigator<'a, P> {
             >= 2
     }
 
+    /// Searches for `link` in the frame of element `i`'s other two landmarks: the POMDP's
+    /// commands through the controller until the link is seen, then a full circle about the
+    /// references' midpoint at sensor range. True when it was seen.
+    fn search_link(
+        &self,
+        w: &mut Walker<'_, P>,
+        i: usize,
+        link: u32,
+        commands: &mut Vec<usize>,
+    ) -> Result<bool> {
+        let map = self.map;
+        let range = self.perception.range();
+        let others: Vec<u32> = map.elements()[i]
+            .landmarks
+            .iter()
+            .copied()
+            .filter(|&l| l != link)
+            .collect();
+        let refs: Option<([f64; 2], [f64; 2], [u32; 2])> = match others.as_slice() {
+            [a, b] => match (self.perception.position(*a), self.perception.position(*b)) {
+                (Some(pa), Some(pb)) => Some((pa, pb, [*a, *b])),
+                _ => None,
+            },
+            _ => None,
+        };
+        let Some((pa, pb, [a, b])) = refs else {
+            return Ok(false);
+        };
+        let calculus = map.calculus(i);
+        let mut belief = map
+            .belief(i, [a, b, link])
+            .unwrap_or_else(|| vec![1.0; calculus.n_states()]);
+        let own;
+        let pomdp = if self.config.pomdp.n_states() == calculus.n_states() {
+            &self.config.pomdp
+        } else {
+            own = self.config.pomdp.for_calculus(calculus)?;
+            &own
+        };
+        for step in 0..pomdp.horizon {
+            let r = robot_state(calculus, pa, pb, w.pos)?;
+            let dec = pomdp.decide_with(r, &belief, pomdp.horizon - step)?;
+            commands.push(dec.action);
+            let path = self
+                .config
+                .controller
+                .path(calculus, pa, pb, dec.action, w.pos)?;
+            let stop = &mut |p: &P, x: [f64; 2]| p.sees(x, link);
+            if w.walk(&path[1..], stop) {
+                return Ok(true);
+            }
+            belief = pomdp.update_not_seen(&belief, dec.action);
+        }
+        // fallback: a full circle about the references' midpoint at sensor range
+        let m = [(pa[0] + pb[0]) / 2.0, (pa[1] + pb[1]) / 2.0];
+        let path = circle(m, range * SEARCH_RADIUS, w.pos, 2.0);
+        Ok(w.walk(&path[1..], &mut |p: &P, x| p.sees(x, link)))
+    }
+
     fn transition(&self, w: &mut Walker<'_, P>, i: usize, j: usize) -> Result<TransitionRecord> {
         let start_len = w.length;
         let map = self.map;
@@ -543,53 +648,9 @@ impl<'a, P: Perception> Navigator<'a, P> {
             return Ok(rec);
         }
         // phase 1: find the link in M_i's frame
-        if !self.perception.sees(w.pos, link) {
-            let others: Vec<u32> = map.elements()[i]
-                .landmarks
-                .iter()
-                .copied()
-                .filter(|&l| l != link)
-                .collect();
-            let refs: Option<([f64; 2], [f64; 2], [u32; 2])> = match others.as_slice() {
-                [a, b] => match (self.perception.position(*a), self.perception.position(*b)) {
-                    (Some(pa), Some(pb)) => Some((pa, pb, [*a, *b])),
-                    _ => None,
-                },
-                _ => None,
-            };
-            let mut found = false;
-            if let Some((pa, pb, [a, b])) = refs {
-                let calculus = map.calculus(i);
-                let mut belief = map
-                    .belief(i, [a, b, link])
-                    .unwrap_or_else(|| vec![1.0; calculus.n_states()]);
-                let pomdp = &self.config.pomdp;
-                for step in 0..pomdp.horizon {
-                    let r = robot_state(calculus, pa, pb, w.pos)?;
-                    let dec = pomdp.decide_with(r, &belief, pomdp.horizon - step)?;
-                    rec.commands.push(dec.action);
-                    let path = self
-                        .config
-                        .controller
-                        .path(calculus, pa, pb, dec.action, w.pos)?;
-                    let stop = &mut |p: &P, x: [f64; 2]| p.sees(x, link);
-                    if w.walk(&path[1..], stop) {
-                        found = true;
-                        break;
-                    }
-                    belief = pomdp.update_not_seen(&belief, dec.action);
-                }
-                if !found {
-                    // fallback: a full circle about the references' midpoint at sensor range
-                    let m = [(pa[0] + pb[0]) / 2.0, (pa[1] + pb[1]) / 2.0];
-                    let path = circle(m, range * SEARCH_RADIUS, w.pos, 2.0);
-                    found = w.walk(&path[1..], &mut |p: &P, x| p.sees(x, link));
-                }
-            }
-            if !found {
-                rec.length = w.length - start_len;
-                return Ok(rec);
-            }
+        if !self.perception.sees(w.pos, link) && !self.search_link(w, i, link, &mut rec.commands)? {
+            rec.length = w.length - start_len;
+            return Ok(rec);
         }
         // phase 2: two landmarks of M_j at once
         if Self::in_frame(self.perception, map, j, w.pos) {

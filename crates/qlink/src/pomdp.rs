@@ -95,6 +95,21 @@ impl SearchPomdp {
         Ok(p)
     }
 
+    /// The same parameters (move and detection probabilities, rewards, horizon; direct
+    /// moves if every move is allowed here) on another calculus's states — for hybrid maps,
+    /// whose layers have different numbers of states.
+    ///
+    /// # Errors
+    /// As [`SearchPomdp::new`].
+    pub fn for_calculus(&self, calculus: &qsr_core::Calculus) -> Result<Self> {
+        let direct = self.allowed.iter().all(|row| row.iter().all(|&a| a));
+        let mut p = Self::new(calculus, direct, self.p_move, self.p_detect, self.horizon)?;
+        p.p_false = self.p_false;
+        p.found_reward = self.found_reward;
+        p.step_cost = self.step_cost;
+        Ok(p)
+    }
+
     /// The same POMDP with another probability of detecting the link when the robot is in
     /// its state (e.g. one measured per landmark: visibility-aware edge costs).
     ///

@@ -199,6 +199,7 @@ pub fn nav_config(range: f64, step: f64) -> Result<NavConfig> {
         replan: false,
         max_replans: 0,
         map_range: MAP_RANGE,
+        find_goal: false,
     })
 }
 

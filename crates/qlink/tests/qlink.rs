@@ -158,6 +158,7 @@ fn config(kind: ControllerKind, range: f64) -> NavConfig {
         replan: true,
         max_replans: 3,
         map_range: range,
+        find_goal: false,
     }
 }
 
@@ -495,4 +496,69 @@ fn proposition_4_holds_for_the_direct_controller() {
         }
         assert!(runs > 30, "{runs}");
     }
+}
+
+/// With `find_goal` the run ends only when the goal landmark itself is seen: reaching the
+/// frame of an element that holds it is not enough (the §4.4.2 field experiment's rule);
+/// a goal that cannot be found is a failure after the goal element is given up.
+#[test]
+fn find_goal_searches_for_the_goal_itself() {
+    let positions: BTreeMap<u32, [f64; 2]> =
+        [(0, [0.0, 0.0]), (1, [10.0, 0.0]), (2, [5.0, 20.0])].into();
+    let map = exact_map(&positions, 40.0);
+    let graph = LinkGraph::new(&map, 1, |_, _, _| 1.0).unwrap();
+    let list: Vec<(u32, [f64; 2])> = positions.iter().map(|(k, v)| (*k, *v)).collect();
+    let perception = RangePerception::new(&list, 12.0);
+    let start = [5.0, -3.0];
+    // frame only: arrival at once
+    let plain = config(ControllerKind::Arc, 12.0);
+    let nav = Navigator::new(&map, &graph, &perception, &plain).unwrap();
+    let out = nav.navigate(start, 2, None, true).unwrap();
+    assert!(out.success && out.length == 0.0);
+    // the goal itself: the robot searches in the frame of 0 and 1 and ends seeing 2
+    let cfg = NavConfig {
+        find_goal: true,
+        ..config(ControllerKind::Arc, 12.0)
+    };
+    let nav = Navigator::new(&map, &graph, &perception, &cfg).unwrap();
+    let out = nav.navigate(start, 2, None, true).unwrap();
+    assert!(out.success, "{:?}", out.failure);
+    assert!(out.length > 5.0);
+    let end = *out.trajectory.last().unwrap();
+    assert!(qlink::Perception::sees(&perception, end, 2));
+    // a goal the robot cannot detect: the element is given up, nothing else holds the goal
+    let blind = RangePerception::new(&list[..2], 12.0);
+    let nav = Navigator::new(&map, &graph, &blind, &cfg).unwrap();
+    let out = nav.navigate(start, 2, None, false).unwrap();
+    assert!(!out.success);
+    assert_eq!(out.failure, Some(qlink::Failure::InsufficientFeatures));
+    assert_eq!(out.replans, 1);
+}
+
+/// Hybrid maps search in layers of different sizes: the POMDP is rebuilt on the other
+/// calculus with the same parameters.
+#[test]
+fn pomdp_for_another_calculus_keeps_its_parameters() {
+    let lr = Calculus::builtin("left-right").unwrap();
+    let q = Calculus::builtin("quadrant").unwrap();
+    let p = SearchPomdp::new(&lr, true, 0.9, 0.7, 3).unwrap();
+    let on_q = p.for_calculus(&q).unwrap();
+    assert_eq!(on_q.n_states(), 4);
+    assert_eq!(on_q, SearchPomdp::new(&q, true, 0.9, 0.7, 3).unwrap());
+    // neighbour-only moves stay neighbour-only
+    // (front / between / behind: front and behind do not touch)
+    let fbb = Calculus::builtin("front-between-behind").unwrap();
+    let nb = SearchPomdp::new(&fbb, false, 0.9, 0.7, 3).unwrap();
+    assert_ne!(nb, SearchPomdp::new(&fbb, true, 0.9, 0.7, 3).unwrap());
+    assert_eq!(nb.for_calculus(&fbb).unwrap(), nb);
+    assert!(p.clone().with_p_detect(1.5).is_err());
+    assert_eq!(
+        p.clone()
+            .with_p_detect(0.3)
+            .unwrap()
+            .decide(0, &[0.5, 0.5])
+            .unwrap()
+            .action,
+        p.decide(0, &[0.5, 0.5]).unwrap().action
+    );
 }

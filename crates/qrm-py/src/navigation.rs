@@ -85,6 +85,7 @@ pub(crate) fn navigate(
             replan,
             max_replans: 3,
             map_range,
+            find_goal: false,
         };
         let perception = RangePerception::new(&landmarks, range);
         let nav = Navigator::new(&map, &graph, &perception, &config)?;
