@@ -109,7 +109,7 @@ const CHUNK: usize = 256;
 /// | `{k, j : i}` (homing-inverse) | `(−x/m, (n − y)/m)` |
 ///
 /// so a step costs one frame per unordered triplet instead of six. Parallel over the first
-/// landmark; the result does not depend on the thread count. Sets come out grouped by
+/// two landmarks; the result does not depend on the thread count. Sets come out grouped by
 /// unordered triplet, in the order of the table.
 ///
 /// # Errors
@@ -122,13 +122,24 @@ pub fn step_counts(
 ) -> Result<StepCounts> {
     let ids = samples.ids();
     let m = ids.len();
-    let per_first: Vec<Result<StepCounts>> = (0..m)
+    // the keys' state table is built once per step, not per triplet
+    let forms = match orderings {
+        Orderings::All => SixForms::new(calculus),
+        Orderings::Canonical => None,
+    };
+    let forms = forms.as_ref();
+    // parallel over the pairs (i, j): tasks of m − j − 1 triplets each balance the two
+    // cores far better than one task per first landmark (m − 1 − i pairs, very unequal)
+    let pairs: Vec<(usize, usize)> = (0..m)
+        .flat_map(|i| (i + 1..m).map(move |j| (i, j)))
+        .collect();
+    let per_first: Vec<Result<StepCounts>> = pairs
         .into_par_iter()
-        .map(|i| {
+        .map(|(i, j)| {
             let mut out = Vec::new();
-            for j in i + 1..m {
+            {
                 for k in j + 1..m {
-                    let counts = triplet_counts(calculus, samples, [i, j, k], orderings)?;
+                    let counts = triplet_counts(calculus, forms, samples, [i, j, k], orderings)?;
                     let [a, b, c] = [ids[i], ids[j], ids[k]];
                     let sets = [
                         [a, b, c],
@@ -195,6 +206,7 @@ fn coincident(samples: &ScanSamples, [i, j, k]: [usize; 3]) -> PqrmError {
 /// counts are identical on every CPU.
 fn triplet_counts(
     calculus: &Calculus,
+    forms: Option<&SixForms>,
     samples: &ScanSamples,
     triplet: [usize; 3],
     orderings: Orderings,
@@ -203,33 +215,37 @@ fn triplet_counts(
     if std::arch::is_x86_feature_detected!("avx2") {
         #[allow(unsafe_code)]
         // SAFETY: `triplet_counts_avx2` only requires AVX2, which was just detected.
-        return unsafe { triplet_counts_avx2(calculus, samples, triplet, orderings) };
+        return unsafe { triplet_counts_avx2(calculus, forms, samples, triplet, orderings) };
     }
-    triplet_counts_portable(calculus, samples, triplet, orderings)
+    triplet_counts_portable(calculus, forms, samples, triplet, orderings)
 }
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
 fn triplet_counts_avx2(
     calculus: &Calculus,
+    forms: Option<&SixForms>,
     samples: &ScanSamples,
     triplet: [usize; 3],
     orderings: Orderings,
 ) -> Result<Vec<Vec<u32>>> {
-    triplet_counts_portable(calculus, samples, triplet, orderings)
+    triplet_counts_portable(calculus, forms, samples, triplet, orderings)
 }
 
+/// `forms` is [`SixForms::new`] of `calculus` when all six orderings are wanted and the
+/// calculus has them (built once per step by the caller).
 #[inline(always)]
 fn triplet_counts_portable(
     calculus: &Calculus,
+    forms: Option<&SixForms>,
     samples: &ScanSamples,
     [i, j, k]: [usize; 3],
     orderings: Orderings,
 ) -> Result<Vec<Vec<u32>>> {
     if orderings == Orderings::All
-        && let Some(forms) = SixForms::new(calculus)
+        && let Some(forms) = forms
     {
-        return six_counts(calculus, &forms, samples, [i, j, k]);
+        return six_counts(calculus, forms, samples, [i, j, k]);
     }
     let q = calculus.n_states();
     let n_orders = if orderings == Orderings::All { 6 } else { 1 };
@@ -291,13 +307,13 @@ fn triplet_counts_portable(
 }
 
 /// The constraints of a line-and-circle calculus, rewritten for each of the six orderings
-/// as forms in the *base* frame of the unordered triplet.
+/// as forms in the *base* frame of the unordered triplet, and grouped into the few
+/// *quantities* whose signs decide them all.
 ///
 /// Every constraint is `f(X, Y) = α(X² + Y²) + βX + γY + δ` (lines: α = 0). The orderings'
 /// positions are Möbius-like maps of the base position `(x, y)` (see [`step_counts`]), and
 /// multiplying `f(T(x, y))` by the positive factor 1, `n` or `m` turns each into a form
-/// `A·n + B·x + C·y + D` with `n = x² + y²` — the same sign, so the same side of the curve.
-/// The six classifications then need no divisions and no transformed points:
+/// `A·n + B·x + C·y + D` with `n = x² + y²` — the same sign, so the same side of the curve:
 ///
 /// | ordering | A | B | C | D |
 /// |---|---|---|---|---|
@@ -307,58 +323,91 @@ fn triplet_counts_portable(
 /// | `(x/n, 1 − y/n)` ×n | α + γ + δ | β | −2α − γ | α |
 /// | `(x/m, (1 − y)/m)` ×m | δ | β | −γ − 2δ | α + γ + δ |
 /// | `(−x/m, (n − y)/m)` ×m | α + γ + δ | −β | −γ − 2δ | δ |
+///
+/// Many of the 6k forms are the same quantity up to sign or a power-of-two factor (the EDC's
+/// 36 are 7 quantities: `x`, `y`, `y − ½`, `y − 1`, `n − 1`, `n − y`, `n − 2y`). A sample is
+/// then classified in all six orderings by the signs of those quantities: one *key* with a
+/// bit per quantity, one histogram bin per key, and a table from keys to the six states
+/// applied once per triplet. Scaling by a power of two and negating are exact in IEEE
+/// arithmetic, so a quantity's sign is exactly each member form's sign; a single-term form
+/// `a·u + d` with `a = ±2^e` is the exact comparison `u ≷ −d/a`. Samples where a quantity
+/// is exactly zero (on a boundary, where the `zero` side of each constraint decides) take a
+/// slow path per sample. The counts are identical to classifying each ordering directly.
 struct SixForms {
-    /// The forms of each ordering, with their bits.
-    forms: [Vec<(Form, u32)>; 6],
+    /// The distinct quantities.
+    quantities: Vec<Quantity>,
+    /// Per ordering, per constraint: which quantity decides it and how.
+    members: [Vec<Member>; 6],
+    /// The six orderings' states for each key with no quantity zero (bit g: quantity g > 0).
+    states: Vec<[u16; 6]>,
 }
 
-/// One form, compiled. Most forms have a single term `±u + D` (`u` one of `n`, `x`, `y`);
-/// those are one comparison, `u ≥ −D` or `u ≤ D`, which is exact in IEEE arithmetic (a
-/// rounded sum is zero only when the exact sum is, and keeps its sign), so the result is the
-/// same as evaluating the form.
+/// A quantity whose sign decides forms: `u − t` (`u` = `[n, x, y][var]`, compared, never
+/// subtracted) or `A·n + B·x + C·y + D` evaluated in that order.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Quantity {
+    /// `u − t`.
+    Single { var: usize, t: f64 },
+    /// `A·n + B·x + C·y + D`, scaled so that the largest |coefficient| is in [1, 2) and the
+    /// first non-zero one is positive.
+    General { coef: [f64; 4] },
+}
+
+/// A constraint of one ordering: its form is `±2^e ×` quantity `q`.
 #[derive(Debug, Clone, Copy)]
-enum Form {
-    /// `u ≥ t` (or `u > t` when not `inclusive`), `u` = `[n, x, y][var]`.
-    Above { var: usize, t: f64, inclusive: bool },
-    /// `u ≤ t` (or `u < t`).
-    Below { var: usize, t: f64, inclusive: bool },
-    /// `A·n + B·x + C·y + D ≥ 0` (or `> 0`).
-    General { coef: [f64; 4], inclusive: bool },
+struct Member {
+    q: usize,
+    negated: bool,
+    /// True on the boundary (the constraint's `zero` side is positive).
+    inclusive: bool,
+    bit: u32,
 }
 
-impl Form {
-    fn compile([a, b, c, d]: [f64; 4], inclusive: bool) -> Self {
+/// Most quantities handled by keys (2^10 histogram bins).
+const MAX_QUANTITIES: usize = 10;
+
+fn power_of_two(v: f64) -> bool {
+    v.is_normal() && v.abs().to_bits() & ((1u64 << 52) - 1) == 0
+}
+
+impl Quantity {
+    /// The quantity of the form `[A, B, C, D]` and whether the form is its negation.
+    fn of([a, b, c, d]: [f64; 4]) -> (Self, bool) {
         let terms = [a, b, c];
         let nonzero: Vec<usize> = (0..3).filter(|&i| terms[i] != 0.0).collect();
-        match nonzero.as_slice() {
-            [var] if terms[*var] == 1.0 => Self::Above {
-                var: *var,
-                t: -d,
-                inclusive,
-            },
-            [var] if terms[*var] == -1.0 => Self::Below {
-                var: *var,
-                t: d,
-                inclusive,
-            },
-            _ => Self::General {
-                coef: [a, b, c, d],
-                inclusive,
-            },
+        if let [var] = nonzero.as_slice()
+            && power_of_two(terms[*var])
+        {
+            // a·u + d = a·(u − t) exactly in sign, t = −d/a exact
+            let t = -d / terms[*var] + 0.0;
+            return (Self::Single { var: *var, t }, terms[*var] < 0.0);
         }
+        let m = [a, b, c, d].iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        if m == 0.0 || !m.is_finite() {
+            return (Self::General { coef: [0.0; 4] }, false);
+        }
+        let scale = 2f64.powi(-(m.log2().floor() as i32));
+        let mut coef = [a * scale, b * scale, c * scale, d * scale];
+        let negated = coef.iter().find(|v| **v != 0.0).is_some_and(|v| *v < 0.0);
+        if negated {
+            coef.iter_mut().for_each(|v| *v = -*v);
+        }
+        coef.iter_mut().for_each(|v| *v += 0.0); // no −0.0
+        (Self::General { coef }, negated)
     }
 }
 
 impl SixForms {
     fn new(calculus: &Calculus) -> Option<Self> {
-        let qsr_core::Partition::Constraints(_) = calculus.partition() else {
+        let qsr_core::Partition::Constraints(partition) = calculus.partition() else {
             return None;
         };
         let spec = calculus.spec();
         if spec.constraints.len() > 8 {
             return None; // 2^k sign-vector bins per ordering stay small (≤ 256)
         }
-        let mut forms: [Vec<(Form, u32)>; 6] = Default::default();
+        let mut quantities: Vec<Quantity> = Vec::new();
+        let mut members: [Vec<Member>; 6] = Default::default();
         for (k, c) in spec.constraints.iter().enumerate() {
             let (al, be, ga, de) = match c.shape {
                 qsr_core::Shape::Line { a, b, c } => (0.0, a, b, c),
@@ -369,7 +418,7 @@ impl SixForms {
                     center[0] * center[0] + center[1] * center[1] - radius * radius,
                 ),
             };
-            let pos = c.zero == qsr_core::Side::Positive;
+            let inclusive = c.zero == qsr_core::Side::Positive;
             let rows = [
                 [al, be, ga, de],
                 [al, -be, -2.0 * al - ga, al + ga + de],
@@ -379,10 +428,52 @@ impl SixForms {
                 [al + ga + de, -be, -ga - 2.0 * de, de],
             ];
             for (o, r) in rows.into_iter().enumerate() {
-                forms[o].push((Form::compile(r, pos), k as u32));
+                let (quantity, negated) = Quantity::of(r);
+                let q = match quantities.iter().position(|x| *x == quantity) {
+                    Some(q) => q,
+                    None => {
+                        quantities.push(quantity);
+                        quantities.len() - 1
+                    }
+                };
+                members[o].push(Member {
+                    q,
+                    negated,
+                    inclusive,
+                    bit: k as u32,
+                });
             }
         }
-        Some(Self { forms })
+        if quantities.len() > MAX_QUANTITIES {
+            return None;
+        }
+        let table = partition.table();
+        let mut signs = vec![0i8; quantities.len()];
+        let states = (0..1usize << quantities.len())
+            .map(|key| {
+                for (g, s) in signs.iter_mut().enumerate() {
+                    *s = if key >> g & 1 == 1 { 1 } else { -1 };
+                }
+                let mut out = [0u16; 6];
+                for (o, st) in out.iter_mut().enumerate() {
+                    *st = table[Self::bin(&members[o], &signs)];
+                }
+                out
+            })
+            .collect();
+        Some(Self {
+            quantities,
+            members,
+            states,
+        })
+    }
+
+    /// The sign-vector bin of one ordering given the quantities' signs (−1, 0, 1).
+    fn bin(members: &[Member], signs: &[i8]) -> usize {
+        members.iter().fold(0usize, |acc, m| {
+            let s = if m.negated { -signs[m.q] } else { signs[m.q] };
+            acc | usize::from(s > 0 || (s == 0 && m.inclusive)) << m.bit
+        })
     }
 }
 
@@ -401,19 +492,21 @@ fn six_counts(
     };
     let table = partition.table();
     let q = calculus.n_states();
-    // Histogram the sign vectors themselves (2^k bins, k ≤ 8 here) and map bins to states
-    // once at the end: the per-sample table lookup disappears from the hot loop.
-    let bins = table.len();
-    let mut counts = vec![vec![[0u32; 4]; bins]; 6];
+    let g = forms.quantities.len();
+    // four interleaved sub-histograms: consecutive samples mostly share a key, and a single
+    // counter would serialise on its own increments
+    let mut hist = vec![[0u32; 4]; 1 << g];
+    let mut out = vec![vec![0u32; q]; 6];
     let ((ax, ay), (bx, by), (cx, cy)) =
         (samples.columns(i), samples.columns(j), samples.columns(k));
     let s = samples.samples();
     let mut xs = [0.0f64; CHUNK];
     let mut ys = [0.0f64; CHUNK];
     let mut ns = [0.0f64; CHUNK];
-    // u64 lanes: an f64 comparison yields a 64-bit mask, so no narrowing in the loops
-    let mut v = [0u64; CHUNK];
+    // key lanes: bit g = quantity g > 0, bit 32 + g = quantity g == 0
+    let mut keys = [0u64; CHUNK];
     let tol2 = qsr_core::DEGENERATE_TOLERANCE * qsr_core::DEGENERATE_TOLERANCE;
+    let mut signs = vec![0i8; g];
     for start in (0..s).step_by(CHUNK) {
         let len = CHUNK.min(s - start);
         let mut valid = true;
@@ -430,66 +523,72 @@ fn six_counts(
             return Err(coincident(samples, [i, j, k]));
         }
         let (x, y, n) = (&xs[..len], &ys[..len], &ns[..len]);
-        for (o, c) in counts.iter_mut().enumerate() {
-            let bv = &mut v[..len];
-            bv.fill(0);
-            let vars = [n, x, y];
-            for &(form, bit) in &forms.forms[o] {
-                match form {
-                    Form::Above { var, t, inclusive } => {
-                        let pts = bv.iter_mut().zip(vars[var]);
-                        if inclusive {
-                            pts.for_each(|(vi, &u)| *vi |= u64::from(u >= t) << bit);
-                        } else {
-                            pts.for_each(|(vi, &u)| *vi |= u64::from(u > t) << bit);
-                        }
-                    }
-                    Form::Below { var, t, inclusive } => {
-                        let pts = bv.iter_mut().zip(vars[var]);
-                        if inclusive {
-                            pts.for_each(|(vi, &u)| *vi |= u64::from(u <= t) << bit);
-                        } else {
-                            pts.for_each(|(vi, &u)| *vi |= u64::from(u < t) << bit);
-                        }
-                    }
-                    Form::General {
-                        coef: [fa, fb, fc, fd],
-                        inclusive,
-                    } => {
-                        let pts = bv.iter_mut().zip(x).zip(y).zip(n);
-                        if inclusive {
-                            pts.for_each(|(((vi, &x), &y), &n)| {
-                                *vi |= u64::from(fa * n + fb * x + fc * y + fd >= 0.0) << bit;
-                            });
-                        } else {
-                            pts.for_each(|(((vi, &x), &y), &n)| {
-                                *vi |= u64::from(fa * n + fb * x + fc * y + fd > 0.0) << bit;
-                            });
-                        }
-                    }
+        let key = &mut keys[..len];
+        key.fill(0);
+        let vars = [n, x, y];
+        for (b, quantity) in forms.quantities.iter().enumerate() {
+            match *quantity {
+                Quantity::Single { var, t } => {
+                    key.iter_mut().zip(vars[var]).for_each(|(kv, &u)| {
+                        *kv |= (u64::from(u > t) << b) | (u64::from(u == t) << (32 + b));
+                    });
+                }
+                Quantity::General {
+                    coef: [fa, fb, fc, fd],
+                } => {
+                    key.iter_mut()
+                        .zip(x)
+                        .zip(y)
+                        .zip(n)
+                        .for_each(|(((kv, &x), &y), &n)| {
+                            let v = fa * n + fb * x + fc * y + fd;
+                            *kv |= (u64::from(v > 0.0) << b) | (u64::from(v == 0.0) << (32 + b));
+                        });
                 }
             }
-            let mut quads = bv.chunks_exact(4);
-            for quad in &mut quads {
-                for (lane, vi) in quad.iter().enumerate() {
-                    c[*vi as usize][lane] += 1;
+        }
+        let mut quads = key.chunks_exact(4);
+        let mut slow = |kv: u64, out: &mut Vec<Vec<u32>>| {
+            // a quantity exactly zero: the constraints' zero sides decide
+            for (b, sg) in signs.iter_mut().enumerate() {
+                *sg = if kv >> (32 + b) & 1 == 1 {
+                    0
+                } else if kv >> b & 1 == 1 {
+                    1
+                } else {
+                    -1
+                };
+            }
+            for (o, c) in out.iter_mut().enumerate() {
+                c[usize::from(table[SixForms::bin(&forms.members[o], &signs)])] += 1;
+            }
+        };
+        for quad in &mut quads {
+            for (lane, &kv) in quad.iter().enumerate() {
+                if kv >> 32 == 0 {
+                    hist[kv as usize][lane] += 1;
+                } else {
+                    slow(kv, &mut out);
                 }
             }
-            for vi in quads.remainder() {
-                c[*vi as usize][0] += 1;
+        }
+        for &kv in quads.remainder() {
+            if kv >> 32 == 0 {
+                hist[kv as usize][0] += 1;
+            } else {
+                slow(kv, &mut out);
             }
         }
     }
-    Ok(counts
-        .into_iter()
-        .map(|c| {
-            let mut out = vec![0u32; q];
-            for (bin, lanes) in c.iter().enumerate() {
-                out[usize::from(table[bin])] += lanes.iter().sum::<u32>();
+    for (kv, lanes) in hist.iter().enumerate() {
+        let n: u32 = lanes.iter().sum();
+        if n > 0 {
+            for (o, c) in out.iter_mut().enumerate() {
+                c[usize::from(forms.states[kv][o])] += n;
             }
-            out
-        })
-        .collect())
+        }
+    }
+    Ok(out)
 }
 
 /// Sums counts of a finer calculus into a coarser one.

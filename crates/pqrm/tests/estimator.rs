@@ -426,3 +426,122 @@ fn the_closed_form_orderings_equal_classifying_each_frame_directly() {
     assert_eq!(canonical.len(), 4);
     assert!(canonical.iter().all(|(s, _)| s.is_canonical()));
 }
+
+/// The six orderings from one base frame (sign keys over shared quantities) against
+/// classifying each ordered triplet directly, for every built-in ternary calculus.
+#[test]
+fn the_closed_form_orderings_equal_direct_classification_in_every_calculus() {
+    use pqrm::likelihood::set_counts;
+    let sc = scan(
+        &[
+            (1, [0.0, 0.0]),
+            (2, [0.4, 1.2]),
+            (3, [-0.5, 0.6]),
+            (5, [1.3, 0.1]),
+            (8, [0.2, -0.9]),
+        ],
+        0.6,
+    );
+    let samples = ScanSamples::draw(&sc, 3000, 23, 1);
+    let index = |id: LandmarkId| samples.ids().iter().position(|x| *x == id).unwrap();
+    let mut buf = Vec::new();
+    let mut tried = 0;
+    for name in qsr_core::BUILTIN_NAMES {
+        let cal = Calculus::builtin(name).unwrap();
+        if cal.frame() != qsr_core::FrameKind::Ternary {
+            continue;
+        }
+        tried += 1;
+        for (set, counts) in step_counts(&cal, &samples, Orderings::All).unwrap() {
+            let [a, b, c] = set.0;
+            let direct =
+                set_counts(&cal, &samples, [index(a), index(b), index(c)], &mut buf).unwrap();
+            assert_eq!(counts, direct, "{name} {set:?}");
+        }
+    }
+    assert_eq!(tried, 6, "the six point calculi");
+}
+
+/// Zero noise on a lattice puts landmarks exactly on lines and circles of each other's
+/// frames: every quantity that is exactly zero must take its constraint's `zero` side. The
+/// reference evaluates every form of every ordering on its own (the table in `likelihood`).
+#[test]
+fn boundary_configurations_take_each_constraints_zero_side() {
+    let pts: Vec<(u32, [f64; 2])> = vec![
+        (0, [0.0, 0.0]),
+        (1, [2.0, 0.0]),
+        (2, [1.0, 0.0]),
+        (3, [2.0, 2.0]),
+        (4, [0.0, 2.0]),
+        (5, [1.0, 1.0]),
+        (6, [1.0, -1.0]),
+        (7, [4.0, 0.0]),
+    ];
+    let sc = scan(&pts, 0.0);
+    let samples = ScanSamples::draw(&sc, 8, 1, 0);
+    let pos = |id: LandmarkId| pts.iter().find(|p| p.0 == id.0).unwrap().1;
+    for name in [
+        "edc",
+        "edc-lune",
+        "double-cross",
+        "triple-cross",
+        "quadrant",
+    ] {
+        let cal = Calculus::builtin(name).unwrap();
+        let qsr_core::Partition::Constraints(part) = cal.partition() else {
+            panic!("{name} is a constraint calculus");
+        };
+        let table = part.table();
+        let spec = cal.spec();
+        let counts = step_counts(&cal, &samples, Orderings::All).unwrap();
+        let mut on_boundary = 0;
+        for group in counts.chunks(6) {
+            let [a, b, c] = group[0].0.0;
+            let (pa, pb, pc) = (pos(a), pos(b), pos(c));
+            // the base frame exactly as the sampler computes it
+            let (dx, dy) = (pb[0] - pa[0], pb[1] - pa[1]);
+            let inv = 1.0 / (dx * dx + dy * dy);
+            let (vx, vy) = (pc[0] - pa[0], pc[1] - pa[1]);
+            let x = -(dx * vy - dy * vx) * inv;
+            let y = (dx * vx + dy * vy) * inv;
+            let n = x * x + y * y;
+            for (o, (set, got)) in group.iter().enumerate() {
+                let mut bin = 0usize;
+                for (k, con) in spec.constraints.iter().enumerate() {
+                    let (al, be, ga, de) = match con.shape {
+                        qsr_core::Shape::Line { a, b, c } => (0.0, a, b, c),
+                        qsr_core::Shape::Circle { center, radius } => (
+                            1.0,
+                            -2.0 * center[0],
+                            -2.0 * center[1],
+                            center[0] * center[0] + center[1] * center[1] - radius * radius,
+                        ),
+                    };
+                    let [fa, fb, fc, fd] = [
+                        [al, be, ga, de],
+                        [al, -be, -2.0 * al - ga, al + ga + de],
+                        [de, -be, ga, al],
+                        [al + ga + de, be, -2.0 * al - ga, al],
+                        [de, be, -ga - 2.0 * de, al + ga + de],
+                        [al + ga + de, -be, -ga - 2.0 * de, de],
+                    ][o];
+                    let v = fa * n + fb * x + fc * y + fd;
+                    if v == 0.0 {
+                        on_boundary += 1;
+                    }
+                    let inclusive = con.zero == qsr_core::Side::Positive;
+                    if v > 0.0 || (v == 0.0 && inclusive) {
+                        bin |= 1 << k;
+                    }
+                }
+                let mut want = vec![0u32; cal.n_states()];
+                want[usize::from(table[bin])] = 8;
+                assert_eq!(got, &want, "{name} {set:?}");
+            }
+        }
+        assert!(
+            on_boundary > 20,
+            "{name}: {on_boundary} boundary cases exercised"
+        );
+    }
+}

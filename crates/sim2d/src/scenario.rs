@@ -372,9 +372,13 @@ impl Scenario {
         let per_frame = (self.frame_period / dt).round().max(1.0) as u64;
         let mut step: u64 = 0;
         let max_steps = 200_000;
+        // the step of the last frame: reaching a waypoint on a frame step must not emit the
+        // same frame again when the loop moves on to the next waypoint
+        let mut last_frame: Option<u64> = None;
         for wp in &self.waypoints {
             loop {
-                if step.is_multiple_of(per_frame) {
+                if step.is_multiple_of(per_frame) && last_frame != Some(step) {
+                    last_frame = Some(step);
                     let detections = self.world.detect(&robot.pose, &self.detector, &mut rng)?;
                     let scan = if lidar {
                         Some(self.world.lidar(&robot.pose, &self.lidar, &mut rng)?)

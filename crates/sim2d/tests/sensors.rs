@@ -396,3 +396,25 @@ fn landmark_sizes_are_configurable_and_bigger_landmarks_occlude_more() {
         "landmarks 3 m apart cannot have a 5 m radius"
     );
 }
+
+/// Regression: reaching a waypoint exactly on a frame step emitted that frame twice (the
+/// field scenario's lidar log then had two scans at one time stamp, which the mapper's CSV
+/// reader rightly rejects as a landmark seen twice in one scan).
+#[test]
+fn frames_are_not_duplicated_when_a_waypoint_is_reached_on_a_frame_step() {
+    for name in sim2d::SCENARIOS {
+        for seed in [0, 1, 2] {
+            let frames = sim2d::scenario(name, seed, None)
+                .unwrap()
+                .run(seed, false)
+                .unwrap();
+            for w in frames.windows(2) {
+                assert!(
+                    w[1].t > w[0].t,
+                    "{name} seed {seed}: frames at t = {}",
+                    w[0].t
+                );
+            }
+        }
+    }
+}
