@@ -28,6 +28,10 @@ pub struct FieldArgs {
     /// Trials per variant (default 200; quick: 12).
     #[arg(long)]
     pub trials: Option<usize>,
+    /// Worlds (scenario seeds seed, seed + 1, …), each mapped and navigated on its own
+    /// (default 5; quick: 1). Rates are reported per world and pooled.
+    #[arg(long)]
+    pub worlds: Option<usize>,
     /// Fewer trials, fewer samples and coarser checks: for tests.
     #[arg(long)]
     pub quick: bool,

@@ -123,6 +123,8 @@ fn quick_field_experiment_writes_its_report() {
             "--quick",
             "--trials",
             "5",
+            "--worlds",
+            "2",
             "--seed",
             "1",
             "--out",
@@ -131,7 +133,12 @@ fn quick_field_experiment_writes_its_report() {
         "",
     );
     let trials = std::fs::read_to_string(out.join("trials.csv")).unwrap();
-    assert_eq!(trials.lines().count(), 1 + 4 * 5, "5 trials × 4 variants");
+    assert_eq!(
+        trials.lines().count(),
+        1 + 2 * 4 * 5,
+        "2 worlds × 4 variants × 5 trials"
+    );
+    assert!(trials.starts_with("world,seed,variant,"));
     let summary: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
     let variants = summary["variants"].as_array().unwrap();
@@ -140,7 +147,15 @@ fn quick_field_experiment_writes_its_report() {
         let rate = v["success_rate"].as_f64().unwrap();
         assert!((0.0..=1.0).contains(&rate), "{v}");
     }
-    assert!(summary["mapping"]["wall_elements"].as_u64().unwrap() > 0);
+    let worlds = summary["worlds"].as_array().unwrap();
+    assert_eq!(worlds.len(), 2);
+    assert_eq!(worlds[1]["seed"], 2, "world seeds follow --seed");
+    for w in worlds {
+        assert!(w["mapping"]["wall_elements"].as_u64().unwrap() > 0);
+    }
+    let spread = summary["success_rate_over_worlds"].as_array().unwrap();
+    assert_eq!(spread.len(), 4);
+    assert!(spread.iter().all(|v| v["sd"].as_f64().unwrap() >= 0.0));
     let report = std::fs::read_to_string(out.join("report.md")).unwrap();
     assert!(report.contains("72.2 %") && report.contains("Table 4.2"));
     for f in ["table_4_2.csv", "fig_4_9_thesis.svg", "fig_4_9_thesis.png"] {
@@ -160,4 +175,16 @@ fn quick_field_experiment_writes_its_report() {
     );
     assert!(!bad.status.success());
     assert!(String::from_utf8_lossy(&bad.stderr).contains("at least 1"));
+    let bad = common::qrm(
+        &[
+            "qlink",
+            "field",
+            "--worlds",
+            "0",
+            "--out",
+            out.to_str().unwrap(),
+        ],
+        "",
+    );
+    assert!(!bad.status.success());
 }

@@ -54,3 +54,21 @@ def test_bad_input():
         qrm.navigate(POSTS, 1, 9, calculus="edc", range=12.0, controller="closest-point")
     with pytest.raises(qrm.InvalidInput):
         qrm.qlink_study("nope", quick=True)
+
+
+def test_field_experiment_in_one_world():
+    res = qrm.qlink_field(quick=True, trials=3, seed=1)
+    assert res["mapping"]["wall_elements"] > 0
+    assert res["draws"]["kept"] == 3
+    names = [v["variant"] for v in res["variants"]]
+    assert names == ["thesis", "safe-search", "visibility-costs", "safe-search+visibility-costs"]
+    for v in res["variants"]:
+        assert 0.0 <= v["success_rate"] <= 1.0
+        assert v["trials"] == 3
+    assert len(res["trials"]) == 4 * 3
+    assert {t["result"] for t in res["trials"]} <= {
+        "success", "perceptual-aliasing", "insufficient-features",
+        "insufficient-features+aliasing", "no-path",
+    }
+    with pytest.raises(qrm.InvalidInput):
+        qrm.qlink_field(trials=0)

@@ -611,9 +611,13 @@ impl<'a, P: Perception> Navigator<'a, P> {
             .edge(i, j)
             .map(|e| e.links().to_vec())
             .unwrap_or_default();
+        // with β ≥ 2 the link set has several landmarks: search for one the robot does not
+        // see yet (a visible one is no progress towards M_j's frame)
         let link = links
-            .first()
+            .iter()
             .copied()
+            .find(|&l| !self.perception.sees(w.pos, l))
+            .or(links.first().copied())
             .unwrap_or(map.elements()[j].landmarks[0]);
         let mut rec = TransitionRecord {
             from: i,

@@ -562,3 +562,33 @@ fn pomdp_for_another_calculus_keeps_its_parameters() {
         p.decide(0, &[0.5, 0.5]).unwrap().action
     );
 }
+
+/// Regression: with β = 2 the navigator searched for the first shared landmark even when
+/// the robot already saw it (no progress), then circled it; it must search for the shared
+/// landmark it does not see.
+#[test]
+fn beta_two_transitions_search_for_the_unseen_link() {
+    let positions: BTreeMap<u32, [f64; 2]> = [
+        (0, [0.0, 0.0]),
+        (1, [8.0, 0.0]),
+        (2, [4.0, 12.0]),
+        (3, [12.0, 12.0]),
+    ]
+    .into();
+    // range 7: only {0, 1, 2} and {1, 2, 3} fit a disc; they share {1, 2}
+    let map = exact_map(&positions, 7.0);
+    assert_eq!(map.elements().len(), 2);
+    let graph = LinkGraph::new(&map, 2, |_, _, _| 1.0).unwrap();
+    let list: Vec<(u32, [f64; 2])> = positions.iter().map(|(k, v)| (*k, *v)).collect();
+    let perception = RangePerception::new(&list, 10.0);
+    let cfg = config(ControllerKind::Arc, 10.0);
+    let nav = Navigator::new(&map, &graph, &perception, &cfg).unwrap();
+    // from (4, −2) the robot sees 0 and 1, not 2 or 3
+    let out = nav.navigate([4.0, -2.0], 3, None, false).unwrap();
+    assert!(out.success, "{:?}", out.failure);
+    assert_eq!(out.transitions.len(), 1);
+    assert_eq!(
+        out.transitions[0].link, 2,
+        "the shared landmark not yet in view"
+    );
+}

@@ -37,6 +37,7 @@ fn _qrm(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(regions::compose_cells, m)?)?;
     m.add_function(wrap_pyfunction!(navigation::navigate, m)?)?;
     m.add_function(wrap_pyfunction!(navigation::qlink_study, m)?)?;
+    m.add_function(wrap_pyfunction!(navigation::qlink_field, m)?)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())
 }

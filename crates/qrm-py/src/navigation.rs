@@ -95,6 +95,48 @@ pub(crate) fn navigate(
     json.map_err(qlink_err)
 }
 
+/// The §4.4.2 field experiment in one world (quick or full settings, `trials` per variant):
+/// JSON `{"mapping": {...}, "draws": {...}, "variants": [...], "trials": [...]}` (trials
+/// without their trajectories).
+#[pyfunction]
+#[pyo3(signature = (quick, trials, seed))]
+pub(crate) fn qlink_field(
+    py: Python<'_>,
+    quick: bool,
+    trials: Option<usize>,
+    seed: u64,
+) -> PyResult<String> {
+    py.detach(move || -> Result<String, QlinkError> {
+        let mut params = if quick {
+            qlink::field::FieldParams::quick(seed)
+        } else {
+            qlink::field::FieldParams::full(seed)
+        };
+        if let Some(n) = trials {
+            params.trials = n;
+        }
+        let variants = qlink::field::FieldVariant::ALL;
+        let (field, draws, ts) = qlink::field::run_field(&params, &variants, &|_| {}, &|| {})?;
+        let summaries = qlink::field::summarise(&ts, &variants);
+        let rows: Vec<serde_json::Value> = ts
+            .iter()
+            .map(|t| {
+                serde_json::json!({
+                    "variant": t.variant, "trial": t.task.trial, "start": t.task.start,
+                    "goal": t.task.goal, "result": t.result, "plan_len": t.plan_len,
+                    "replans": t.replans, "length": t.length,
+                    "final_distance": t.final_distance,
+                })
+            })
+            .collect();
+        serde_json::to_string(&serde_json::json!({
+            "mapping": field.stats, "draws": draws, "variants": summaries, "trials": rows,
+        }))
+        .map_err(|e| QlinkError::InvalidParameter(e.to_string()))
+    })
+    .map_err(qlink_err)
+}
+
 /// The §4.4.1 study (quick or full) for `trial` = sensor-range, occlusion or all; returns
 /// JSON `{"table": [...], "records": [...]}`.
 #[pyfunction]

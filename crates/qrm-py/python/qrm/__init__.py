@@ -4,7 +4,8 @@ Calculi (`Calculus`), probabilistic qualitative relational mapping (`Pqrm`), obs
 files (`read_observations`) and the thesis's Monte Carlo study, sharded for distributed runs
 (`monte_carlo_config`, `monte_carlo_shard`, `monte_carlo_aggregate`, `monte_carlo`); salient
 region maps and learned calculi (`serge`, `SalientRegionMap`, `compose_cells`,
-`serge_cross_validate`); navigation with Q-Link (`navigate`, `qlink_study`).
+`serge_cross_validate`); navigation with Q-Link (`navigate`, `qlink_study`,
+`qlink_field`).
 
 Every error is a `QrmError`; the subclasses say what kind (see the hierarchy in the stubs).
 """
@@ -52,6 +53,7 @@ __all__ = [
     "monte_carlo_shard",
     "navigate",
     "qlink_study",
+    "qlink_field",
     "read_observations",
     "serge",
     "serge_cross_validate",
@@ -177,6 +179,17 @@ def navigate(
                       beta=beta, controller=controller, horizon=horizon, replan=replan)
     )
     return out
+
+
+def qlink_field(*, quick: bool = True, trials: Optional[int] = None, seed: int = 0) -> Dict[str, Any]:
+    """The §4.4.2 field experiment in one world: a lidar-only hybrid map of the simulated
+    field site and random start/goal trials for the thesis's set-up and its improvements.
+    Returns `{"mapping", "draws", "variants", "trials"}` (success rates and failure causes
+    per variant in "variants")."""
+    if trials is not None and trials < 1:
+        raise InvalidInput(f"trials = {trials}: at least 1")
+    result: Dict[str, Any] = json.loads(_qrm.qlink_field(quick, trials, seed))
+    return result
 
 
 def qlink_study(trial: str = "all", *, quick: bool = True, pairs: Optional[int] = None, seed: int = 0) -> Dict[str, Any]:

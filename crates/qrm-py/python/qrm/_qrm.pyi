@@ -28,6 +28,7 @@ __all__ = [
     "compose_cells",
     "navigate",
     "qlink_study",
+    "qlink_field",
     "__version__",
 ]
 
@@ -184,3 +185,4 @@ def navigate(
     replan: bool = True,
 ) -> str: ...
 def qlink_study(trial: str, quick: bool, pairs: Optional[int], seed: int) -> str: ...
+def qlink_field(quick: bool, trials: Optional[int], seed: int) -> str: ...
