@@ -168,6 +168,7 @@ pub enum FieldVariant {
     /// Visibility-aware edge costs.
     VisibilityCosts,
     /// Both improvements.
+    #[serde(rename = "safe-search+visibility-costs")]
     Both,
 }
 

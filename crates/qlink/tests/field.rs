@@ -202,3 +202,14 @@ fn bad_field_parameters_are_errors() {
         assert!(map_field(&p).is_err());
     }
 }
+
+/// Files name a variant one way: the CSV/report name is the JSON name.
+#[test]
+fn variant_names_agree_in_json_and_files() {
+    for v in FieldVariant::ALL {
+        assert_eq!(
+            serde_json::to_value(v).unwrap(),
+            serde_json::Value::String(v.name().to_owned())
+        );
+    }
+}
