@@ -208,15 +208,15 @@ pub struct MappingStats {
     pub frames: usize,
     /// Distinct recogniser ids in the map.
     pub mapped_ids: usize,
-    /// Of those, ids first recognised from a real landmark.
+    /// Of those, ids most often recognised from a real landmark.
     pub real_landmarks: usize,
-    /// Of those, ids first recognised from clutter (ground returns) or a wall.
+    /// Of those, ids most often recognised from clutter (ground returns) or a wall.
     pub false_landmarks: usize,
     /// Landmarks in the world.
     pub world_landmarks: usize,
     /// Point detections during mapping.
     pub detections: usize,
-    /// Detections whose object differs from the one their id was first recognised from.
+    /// Detections whose object differs from the one their id was most often recognised from.
     pub aliased_detections: usize,
     /// Scans in which both walls were extracted.
     pub wall_frames: usize,
@@ -500,7 +500,8 @@ pub fn map_field(params: &FieldParams) -> Result<FieldMap> {
 struct Seen {
     id: u32,
     pos: [f64; 2],
-    /// The object truly is the one the id was first recognised from.
+    /// The object truly is the one the id was most often recognised from during the
+    /// mapping drive.
     consistent: bool,
 }
 
@@ -826,10 +827,6 @@ pub fn tasks(field: &FieldMap, params: &FieldParams) -> Result<(Vec<FieldTask>, 
     Ok((out, draws))
 }
 
-fn params_step(config: &NavConfig) -> f64 {
-    config.step
-}
-
 fn seg_dist(p: [f64; 2], a: [f64; 2], b: [f64; 2]) -> f64 {
     let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
     let l2 = dx * dx + dy * dy;
@@ -930,7 +927,7 @@ pub fn run_trial(
                     .iter()
                     .fold([0.0, 0.0], |m, p| [m[0] + p[0] / n, m[1] + p[1] / n]);
                 let dist = (c[0] - end[0]).hypot(c[1] - end[1]);
-                let k = (dist / params_step(config)).ceil().max(1.0) as usize;
+                let k = (dist / config.step).ceil().max(1.0) as usize;
                 for i in 1..=k {
                     let t = i as f64 / k as f64;
                     let p = [end[0] + t * (c[0] - end[0]), end[1] + t * (c[1] - end[1])];
