@@ -11,6 +11,7 @@
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, StandardNormal};
+use rayon::prelude::*;
 
 use crate::observation::{LandmarkId, Scan};
 
@@ -38,25 +39,27 @@ pub struct ScanSamples {
 }
 
 impl ScanSamples {
-    /// Draws `samples` points from each observation's Gaussian.
+    /// Draws `samples` points from each observation's Gaussian (landmarks in parallel: each
+    /// has its own generator, so the samples do not depend on the thread count).
     #[must_use]
     pub fn draw(scan: &Scan, samples: usize, seed: u64, step: u64) -> Self {
-        let mut xs = Vec::with_capacity(scan.observations.len());
-        let mut ys = Vec::with_capacity(scan.observations.len());
-        for o in &scan.observations {
-            let mut rng = landmark_rng(seed, step, o.id);
-            let [l11, l21, l22] = o.cholesky();
-            let mut x = Vec::with_capacity(samples);
-            let mut y = Vec::with_capacity(samples);
-            for _ in 0..samples {
-                let z1: f64 = StandardNormal.sample(&mut rng);
-                let z2: f64 = StandardNormal.sample(&mut rng);
-                x.push(o.mean[0] + l11 * z1);
-                y.push(o.mean[1] + l21 * z1 + l22 * z2);
-            }
-            xs.push(x);
-            ys.push(y);
-        }
+        let (xs, ys): (Vec<Vec<f64>>, Vec<Vec<f64>>) = scan
+            .observations
+            .par_iter()
+            .map(|o| {
+                let mut rng = landmark_rng(seed, step, o.id);
+                let [l11, l21, l22] = o.cholesky();
+                let mut x = Vec::with_capacity(samples);
+                let mut y = Vec::with_capacity(samples);
+                for _ in 0..samples {
+                    let z1: f64 = StandardNormal.sample(&mut rng);
+                    let z2: f64 = StandardNormal.sample(&mut rng);
+                    x.push(o.mean[0] + l11 * z1);
+                    y.push(o.mean[1] + l21 * z1 + l22 * z2);
+                }
+                (x, y)
+            })
+            .unzip();
         Self {
             ids: scan.observations.iter().map(|o| o.id).collect(),
             xs,
