@@ -184,13 +184,13 @@ pub fn run(a: DemoArgs) -> Result<()> {
             .ok()
             .map(|p| p.len())
     };
-    let pos_of_landmark = |l: u32| {
+    let pos_of = |id: u32| {
         sc.world
             .spec()
             .landmarks
             .iter()
-            .find(|x| x.id == l)
-            .map(|x| x.pos)
+            .find(|l| l.id == id)
+            .map(|l| l.pos)
     };
     let mut choice: Option<([f64; 2], u32)> = None;
     for f in frames.iter().filter(|f| f.detections.len() >= 3) {
@@ -206,7 +206,7 @@ pub fn run(a: DemoArgs) -> Result<()> {
                 .into_iter()
                 .filter(|&l| plan_len(&starts, l).is_some_and(|n| n >= 1))
                 .filter_map(|l| {
-                    let p = pos_of_landmark(l)?;
+                    let p = pos_of(l)?;
                     Some((l, (p[0] - start[0]).hypot(p[1] - start[1])))
                 })
                 .min_by(|x, y| x.1.total_cmp(&y.1).then(x.0.cmp(&y.0)))
@@ -242,14 +242,6 @@ pub fn run(a: DemoArgs) -> Result<()> {
     }
     let traj: Vec<(f64, f64)> = outcome.trajectory.iter().map(|p| (p[0], p[1])).collect();
     // the plan's skeleton: start → each link landmark searched for → goal landmark
-    let pos_of = |id: u32| {
-        sc.world
-            .spec()
-            .landmarks
-            .iter()
-            .find(|l| l.id == id)
-            .map(|l| l.pos)
-    };
     let mut chain: Vec<[f64; 2]> = vec![start];
     chain.extend(
         outcome

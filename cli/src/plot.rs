@@ -415,6 +415,40 @@ pub fn histogram(
     )
 }
 
+/// A chart in metres on both axes.
+type MetreChart<'a, DB> = ChartContext<
+    'a,
+    DB,
+    Cartesian2d<plotters::coord::types::RangedCoordf64, plotters::coord::types::RangedCoordf64>,
+>;
+
+/// A chart over a world's bounds with equal scales on both axes, and its half-width (m).
+fn world_chart<'a, DB: DrawingBackend>(
+    root: &'a DrawingArea<DB, Shift>,
+    title: &str,
+    w: &sim2d::WorldSpec,
+) -> std::result::Result<(MetreChart<'a, DB>, f64), DrawingAreaErrorKind<DB::ErrorType>>
+where
+    DB::ErrorType: 'static,
+{
+    let [x0, x1, y0, y1] = w.bounds;
+    let (dx, dy) = (x1 - x0, y1 - y0);
+    let aspect = f64::from(SIZE.0 - 60) / f64::from(SIZE.1 - 60);
+    let (cx, cy) = ((x0 + x1) / 2.0, (y0 + y1) / 2.0);
+    let (hx, hy) = if dx / dy > aspect {
+        (dx / 2.0, dx / aspect / 2.0)
+    } else {
+        (dy * aspect / 2.0, dy / 2.0)
+    };
+    let chart = ChartBuilder::on(root)
+        .margin(12)
+        .caption(title, ("sans-serif", 20))
+        .x_label_area_size(30)
+        .y_label_area_size(40)
+        .build_cartesian_2d((cx - hx)..(cx + hx), (cy - hy)..(cy + hy))?;
+    Ok((chart, hx))
+}
+
 fn draw_scenario<DB: DrawingBackend>(
     root: &DrawingArea<DB, Shift>,
     title: &str,
@@ -426,22 +460,7 @@ where
     DB::ErrorType: 'static,
 {
     root.fill(&WHITE)?;
-    let [x0, x1, y0, y1] = w.bounds;
-    // Equal scales on both axes.
-    let (dx, dy) = (x1 - x0, y1 - y0);
-    let aspect = f64::from(SIZE.0 - 60) / f64::from(SIZE.1 - 60);
-    let (cx, cy) = ((x0 + x1) / 2.0, (y0 + y1) / 2.0);
-    let (hx, hy) = if dx / dy > aspect {
-        (dx / 2.0, dx / aspect / 2.0)
-    } else {
-        (dy * aspect / 2.0, dy / 2.0)
-    };
-    let mut chart = ChartBuilder::on(root)
-        .margin(12)
-        .caption(title, ("sans-serif", 20))
-        .x_label_area_size(30)
-        .y_label_area_size(40)
-        .build_cartesian_2d((cx - hx)..(cx + hx), (cy - hy)..(cy + hy))?;
+    let (mut chart, hx) = world_chart(root, title, w)?;
     chart
         .configure_mesh()
         .x_desc("x (m)")
@@ -501,22 +520,8 @@ where
     DB::ErrorType: 'static,
 {
     draw_scenario(root, title, w, drive, &[])?;
-    // the same equal-scale chart as draw_scenario, drawn over it
-    let [x0, x1, y0, y1] = w.bounds;
-    let (dx, dy) = (x1 - x0, y1 - y0);
-    let aspect = f64::from(SIZE.0 - 60) / f64::from(SIZE.1 - 60);
-    let (cx, cy) = ((x0 + x1) / 2.0, (y0 + y1) / 2.0);
-    let (hx, hy) = if dx / dy > aspect {
-        (dx / 2.0, dx / aspect / 2.0)
-    } else {
-        (dy * aspect / 2.0, dy / 2.0)
-    };
-    let mut chart = ChartBuilder::on(root)
-        .margin(12)
-        .caption(" ", ("sans-serif", 20))
-        .x_label_area_size(30)
-        .y_label_area_size(40)
-        .build_cartesian_2d((cx - hx)..(cx + hx), (cy - hy)..(cy + hy))?;
+    // the same chart as draw_scenario (same title space, so the same mapping), drawn over it
+    let (mut chart, _) = world_chart(root, title, w)?;
     for (i, (path, ok)) in runs.iter().enumerate() {
         let colour = if *ok {
             Palette99::pick(i).mix(0.8)

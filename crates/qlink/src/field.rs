@@ -300,6 +300,19 @@ fn point_and_walls(
     (points, both)
 }
 
+/// Every triplet of a scan's observations: its sorted ids and the three observations.
+fn triplets(obs: &[Observation]) -> impl Iterator<Item = ([u32; 3], [Observation; 3])> + '_ {
+    obs.iter().enumerate().flat_map(move |(i, a)| {
+        obs.iter().enumerate().skip(i + 1).flat_map(move |(j, b)| {
+            obs[j + 1..].iter().map(move |c| {
+                let mut k = [a.id.0, b.id.0, c.id.0];
+                k.sort_unstable();
+                (k, [*a, *b, *c])
+            })
+        })
+    })
+}
+
 /// Maps the field site with the lidar (see the module docs).
 ///
 /// # Errors
@@ -377,30 +390,17 @@ pub fn map_field(params: &FieldParams) -> Result<FieldMap> {
     // pass 2: the layers, from triplets (and landmarks) seen often enough
     let mut count: BTreeMap<[u32; 3], usize> = BTreeMap::new();
     for (_, obs, _, _) in &per_frame {
-        for (i, a) in obs.iter().enumerate() {
-            for (j, b) in obs.iter().enumerate().skip(i + 1) {
-                for c in &obs[j + 1..] {
-                    let mut k = [a.id.0, b.id.0, c.id.0];
-                    k.sort_unstable();
-                    *count.entry(k).or_insert(0) += 1;
-                }
-            }
+        for (k, _) in triplets(obs) {
+            *count.entry(k).or_insert(0) += 1;
         }
     }
     let often = |k: &[u32; 3]| count.get(k).is_some_and(|&n| n >= params.min_observations);
     let mut points_layer = Pqrm::new(Calculus::builtin("left-right")?, config)?;
     let mut wall_layer = Pqrm::new(wall_calculus()?, config)?;
     for (t, obs, walls, pose) in &per_frame {
-        for (i, a) in obs.iter().enumerate() {
-            for (j, b) in obs.iter().enumerate().skip(i + 1) {
-                for c in &obs[j + 1..] {
-                    let mut k = [a.id.0, b.id.0, c.id.0];
-                    k.sort_unstable();
-                    if often(&k) {
-                        let scan = Scan::new(*t, 0, vec![*a, *b, *c])?;
-                        points_layer.update(&scan)?;
-                    }
-                }
+        for (k, three) in triplets(obs) {
+            if often(&k) {
+                points_layer.update(&Scan::new(*t, 0, three.to_vec())?)?;
             }
         }
         if *walls {
