@@ -4,7 +4,7 @@ Each Ray task runs one shard (a range of trial indices of every noise level); tr
 l is seeded by (seed, l, t) alone, so the shards can run on any machine in any order and their
 records aggregate into exactly the result of one local run.
 
-    pip install qrm-*.whl "ray[default]"
+    pip install qrm_robotics-*.whl "ray[default]"
     python examples/python/ray_sweep.py --shards 64 --trials 1000
 
 Without Ray installed (or with --no-ray) the same shards run one after another locally, which

@@ -42,7 +42,7 @@ impl Calculus {
         let result: Result<Vec<i64>, qsr_core::QsrError> = match (k, points.as_slice()) {
             (6, Ok(flat)) => {
                 let (rows, _) = flat.as_chunks::<6>();
-                py.detach(|| {
+                crate::pool::detach(py, || {
                     let mut out = vec![StateId(0); rows.len()];
                     calc.classify_triplets(rows, &mut out)
                         .map(|()| out.iter().map(|s| i64::from(s.0)).collect())
@@ -50,7 +50,7 @@ impl Calculus {
             }
             _ => {
                 let rows: Vec<Vec<f64>> = view.rows().into_iter().map(|r| r.to_vec()).collect();
-                py.detach(|| {
+                crate::pool::detach(py, || {
                     rows.iter()
                         .enumerate()
                         .map(|(i, r)| {
@@ -209,7 +209,7 @@ impl Calculus {
                 .map_err(|e| invalid(format!("out must be contiguous: {e}")))?;
             let (rows, _) = flat.as_chunks::<6>();
             let calc = &self.inner;
-            py.detach(|| classify_into(calc, rows, dst)).map_err(qsr)?;
+            crate::pool::detach(py, || classify_into(calc, rows, dst)).map_err(qsr)?;
         }
         Ok(target)
     }
@@ -230,7 +230,7 @@ impl Calculus {
     /// Conceptual neighbours: {"states", "adjacent", "distance"} (distance matrix in state
     /// order, None for unconnected pairs).
     fn neighbours<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, pyo3::types::PyDict>> {
-        let g = py.detach(|| self.inner.neighbours().clone());
+        let g = crate::pool::detach(py, || self.inner.neighbours().clone());
         let d = pyo3::types::PyDict::new(py);
         d.set_item("states", self.inner.labels().to_vec())?;
         let adjacent: Vec<(String, String)> = g
@@ -256,15 +256,14 @@ impl Calculus {
         py: Python<'_>,
         generic: bool,
     ) -> PyResult<BTreeMap<String, BTreeMap<String, Vec<String>>>> {
-        let table = py
-            .detach(|| {
-                if generic {
-                    self.inner.compose_table_with(&ComposeOptions::generic())
-                } else {
-                    self.inner.compose_table().cloned()
-                }
-            })
-            .map_err(qsr)?;
+        let table = crate::pool::detach(py, || {
+            if generic {
+                self.inner.compose_table_with(&ComposeOptions::generic())
+            } else {
+                self.inner.compose_table().cloned()
+            }
+        })
+        .map_err(qsr)?;
         let c = &self.inner;
         Ok(c.states()
             .map(|r| {
@@ -288,9 +287,8 @@ impl Calculus {
         generic: bool,
     ) -> PyResult<BTreeMap<String, Vec<String>>> {
         let op: Permutation = op.parse().map_err(qsr)?;
-        let table = py
-            .detach(|| self.inner.permutation_with(op, !generic))
-            .map_err(qsr)?;
+        let table =
+            crate::pool::detach(py, || self.inner.permutation_with(op, !generic)).map_err(qsr)?;
         let c = &self.inner;
         Ok(c.states()
             .map(|r| (c.label(r).to_owned(), labels(c, table.get(r))))
@@ -303,7 +301,7 @@ impl Calculus {
         py: Python<'py>,
         coarse: &Calculus,
     ) -> PyResult<Bound<'py, PyArray1<i64>>> {
-        let m = self.inner.merge_map(&coarse.inner).map_err(qsr)?;
+        let m = crate::pool::detach(py, || self.inner.merge_map(&coarse.inner)).map_err(qsr)?;
         Ok(m.as_slice()
             .iter()
             .map(|s| i64::from(s.0))

@@ -1,67 +1,111 @@
 //! The exception hierarchy and the mapping from the Rust error enums.
 //!
 //! ```text
-//! QrmError
-//! ├── InvalidInput        bad numbers, shapes, covariances, arity, configuration
-//! │   └── DegenerateFrame coincident reference points / landmarks
-//! ├── SpecError           malformed or invalid calculus spec, unknown calculus/state/op
-//! ├── UnsupportedError    an operation a calculus does not define
-//! ├── FormatError         malformed saved map or input file
-//! └── IoError             a file that cannot be read or written
+//! QrmError                                   (Exception)
+//! ├── InvalidInput        + ValueError          bad numbers, shapes, covariances, arity, configuration
+//! │   └── DegenerateFrame                       coincident reference points / landmarks
+//! ├── SpecError           + ValueError          malformed or invalid calculus spec, unknown calculus/state/op
+//! ├── UnsupportedError    + NotImplementedError an operation a calculus does not define
+//! ├── FormatError         + ValueError          malformed saved map or input file
+//! └── IoError             + OSError             a file that cannot be read or written
 //! ```
 
 use pqrm::PqrmError;
-use pyo3::exceptions::PyException;
 use pyo3::prelude::*;
+use pyo3::sync::PyOnceLock;
+use pyo3::types::{PyModule, PyType};
 use qsr_core::QsrError;
 
-pyo3::create_exception!(qrm, QrmError, PyException, "Base class of every qrm error.");
-pyo3::create_exception!(
-    qrm,
-    InvalidInput,
+/// The hierarchy as Python source. Each class also derives from the builtin a Python user
+/// would catch for that kind of failure (`except ValueError` catches a bad input, `except
+/// OSError` a missing file), which `pyo3::create_exception!` cannot express: it takes one base.
+const HIERARCHY: &std::ffi::CStr = cr#"
+class QrmError(Exception):
+    """Base class of every qrm error."""
+    __module__ = "qrm"
+
+class InvalidInput(QrmError, ValueError):
+    """Bad numbers, shapes, covariances or settings (also a ValueError)."""
+    __module__ = "qrm"
+
+class DegenerateFrame(InvalidInput):
+    """Coincident reference points or landmarks (also a ValueError)."""
+    __module__ = "qrm"
+
+class SpecError(QrmError, ValueError):
+    """A calculus spec or name that is not valid (also a ValueError)."""
+    __module__ = "qrm"
+
+class UnsupportedError(QrmError, NotImplementedError):
+    """An operation the calculus does not define (also a NotImplementedError)."""
+    __module__ = "qrm"
+
+class FormatError(QrmError, ValueError):
+    """A malformed saved map or input file (also a ValueError)."""
+    __module__ = "qrm"
+
+class IoError(QrmError, OSError):
+    """A file that cannot be read or written (also an OSError)."""
+    __module__ = "qrm"
+"#;
+
+/// The class names, in the order they are registered.
+const CLASSES: [&str; 7] = [
+    "QrmError",
+    "InvalidInput",
+    "DegenerateFrame",
+    "SpecError",
+    "UnsupportedError",
+    "FormatError",
+    "IoError",
+];
+
+static MODULE: PyOnceLock<Py<PyModule>> = PyOnceLock::new();
+
+/// The module holding the classes, built once per interpreter.
+fn hierarchy(py: Python<'_>) -> PyResult<&Bound<'_, PyModule>> {
+    MODULE
+        .get_or_try_init(py, || {
+            PyModule::from_code(py, HIERARCHY, c"qrm/_errors.py", c"qrm._errors").map(Bound::unbind)
+        })
+        .map(|m| m.bind(py))
+}
+
+/// The class called `name`.
+fn class<'py>(py: Python<'py>, name: &str) -> PyResult<Bound<'py, PyType>> {
+    Ok(hierarchy(py)?.getattr(name)?.cast_into::<PyType>()?)
+}
+
+/// One zero-sized handle per class, with the `new_err` constructor the rest of the crate uses.
+macro_rules! exception {
+    ($($name:ident),*) => {$(
+        pub(crate) struct $name;
+        impl $name {
+            pub(crate) fn new_err(msg: impl Into<String>) -> PyErr {
+                let msg = msg.into();
+                Python::attach(|py| match class(py, stringify!($name)) {
+                    Ok(ty) => PyErr::from_type(ty, msg),
+                    Err(e) => e,
+                })
+            }
+        }
+    )*};
+}
+exception!(
     QrmError,
-    "Bad numbers, shapes, covariances or settings."
-);
-pyo3::create_exception!(
-    qrm,
+    InvalidInput,
     DegenerateFrame,
-    InvalidInput,
-    "Coincident reference points or landmarks."
-);
-pyo3::create_exception!(
-    qrm,
     SpecError,
-    QrmError,
-    "A calculus spec or name that is not valid."
-);
-pyo3::create_exception!(
-    qrm,
     UnsupportedError,
-    QrmError,
-    "An operation the calculus does not define."
-);
-pyo3::create_exception!(
-    qrm,
     FormatError,
-    QrmError,
-    "A malformed saved map or input file."
-);
-pyo3::create_exception!(
-    qrm,
-    IoError,
-    QrmError,
-    "A file that cannot be read or written."
+    IoError
 );
 
 pub(crate) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     let py = m.py();
-    m.add("QrmError", py.get_type::<QrmError>())?;
-    m.add("InvalidInput", py.get_type::<InvalidInput>())?;
-    m.add("DegenerateFrame", py.get_type::<DegenerateFrame>())?;
-    m.add("SpecError", py.get_type::<SpecError>())?;
-    m.add("UnsupportedError", py.get_type::<UnsupportedError>())?;
-    m.add("FormatError", py.get_type::<FormatError>())?;
-    m.add("IoError", py.get_type::<IoError>())?;
+    for name in CLASSES {
+        m.add(name, class(py, name)?)?;
+    }
     Ok(())
 }
 

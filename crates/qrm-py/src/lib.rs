@@ -5,7 +5,8 @@
 //! package (`qrm/__init__.py`, `_qrm.pyi`, `py.typed`) sits in `python/qrm`.
 //!
 //! Errors: each Rust error kind maps to one exception class under `qrm.QrmError` (see
-//! [`errors`]). Long calls release the interpreter (`Python::detach`). A Rust panic inside a
+//! [`errors`]). Long calls release the interpreter and run in a fork-safe thread pool
+//! ([`pool`]). A Rust panic inside a
 //! call becomes a Python `PanicException` (pyo3 catches it at the boundary), never a crash.
 #![allow(unsafe_code)] // pyo3's #[pymodule]/#[pyclass]/#[pymethods] expand to unsafe FFI glue; this crate writes none itself.
 
@@ -13,6 +14,7 @@ mod calculus;
 mod errors;
 mod mapping;
 mod navigation;
+mod pool;
 mod regions;
 mod simulation;
 
@@ -38,6 +40,7 @@ fn _qrm(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(navigation::navigate, m)?)?;
     m.add_function(wrap_pyfunction!(navigation::qlink_study, m)?)?;
     m.add_function(wrap_pyfunction!(navigation::qlink_field, m)?)?;
+    m.add_function(wrap_pyfunction!(pool::worker_threads, m)?)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())
 }

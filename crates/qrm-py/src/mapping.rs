@@ -113,7 +113,7 @@ impl Pqrm {
     ) -> PyResult<Bound<'py, PyDict>> {
         let scan = scan_from_arrays(t, robot, &ids, &xy, &cov)?;
         let map = &mut self.inner;
-        let report = py.detach(|| map.update(&scan)).map_err(perr)?;
+        let report = crate::pool::detach(py, || map.update(&scan)).map_err(perr)?;
         let d = PyDict::new(py);
         d.set_item("observed", report.observed)?;
         d.set_item("new", report.new)?;
@@ -156,7 +156,8 @@ impl Pqrm {
         py: Python<'py>,
         truth: BTreeMap<u32, (f64, f64)>,
     ) -> PyResult<Bound<'py, PyDict>> {
-        let m = pqrm::evaluate(&self.inner, &truth_from_dict(&truth)).map_err(perr)?;
+        let truth = truth_from_dict(&truth);
+        let m = crate::pool::detach(py, || pqrm::evaluate(&self.inner, &truth)).map_err(perr)?;
         let d = PyDict::new(py);
         d.set_item("n_sets", m.n_sets)?;
         d.set_item("n_scored", m.n_scored)?;
@@ -171,8 +172,9 @@ impl Pqrm {
     }
 
     /// Folds another map of the same calculus into this one.
-    fn merge(&mut self, other: &Pqrm) -> PyResult<()> {
-        self.inner.merge(&other.inner).map_err(perr)
+    fn merge(&mut self, py: Python<'_>, other: &Pqrm) -> PyResult<()> {
+        let inner = &mut self.inner;
+        crate::pool::detach(py, || inner.merge(&other.inner)).map_err(perr)
     }
 
     /// Saves to a JSON file (atomically).
@@ -220,21 +222,20 @@ pub(crate) fn read_observations<'py>(
     sigma_range: f64,
     sigma_bearing: f64,
 ) -> PyResult<(Vec<Bound<'py, PyDict>>, Option<TruthDict>)> {
-    let data = py
-        .detach(|| match format {
-            "csv" => Ok(pqrm::loaders::read_csv(&path)),
-            "mrclam" => Ok(pqrm::loaders::read_mrclam(
-                &path,
-                RangeBearingNoise {
-                    sigma_range,
-                    sigma_bearing,
-                },
-            )),
-            "g2o" => Ok(pqrm::loaders::read_g2o(&path)),
-            other => Err(other.to_owned()),
-        })
-        .map_err(|f| invalid(format!("format must be csv, mrclam or g2o, got {f:?}")))?
-        .map_err(perr)?;
+    let data = crate::pool::detach(py, || match format {
+        "csv" => Ok(pqrm::loaders::read_csv(&path)),
+        "mrclam" => Ok(pqrm::loaders::read_mrclam(
+            &path,
+            RangeBearingNoise {
+                sigma_range,
+                sigma_bearing,
+            },
+        )),
+        "g2o" => Ok(pqrm::loaders::read_g2o(&path)),
+        other => Err(other.to_owned()),
+    })
+    .map_err(|f| invalid(format!("format must be csv, mrclam or g2o, got {f:?}")))?
+    .map_err(perr)?;
     let mut scans = Vec::with_capacity(data.scans.len());
     for s in &data.scans {
         let d = PyDict::new(py);
@@ -301,9 +302,10 @@ pub(crate) fn single_observation<'py>(
     ];
     let covs = [0, 1, 2].map(|i| [[c[[i, 0]], c[[i, 1]]], [c[[i, 1]], c[[i, 2]]]]);
     let calc = &calculus.inner;
-    let probs = py
-        .detach(|| pqrm::study::single_observation(calc, pts, covs, samples, floor, seed))
-        .map_err(perr)?;
+    let probs = crate::pool::detach(py, || {
+        pqrm::study::single_observation(calc, pts, covs, samples, floor, seed)
+    })
+    .map_err(perr)?;
     Ok(probs.into_pyarray(py))
 }
 
@@ -321,9 +323,10 @@ pub(crate) fn monte_carlo_shard(
     count: usize,
 ) -> PyResult<String> {
     let cfg = config_from_json(config)?;
-    let records = py
-        .detach(|| pqrm::study::run_monte_carlo_shard(&cfg, start, count, &|| {}))
-        .map_err(perr)?;
+    let records = crate::pool::detach(py, || {
+        pqrm::study::run_monte_carlo_shard(&cfg, start, count, &|| {})
+    })
+    .map_err(perr)?;
     serde_json::to_string(&records).map_err(|e| invalid(e.to_string()))
 }
 
@@ -341,8 +344,7 @@ pub(crate) fn monte_carlo_aggregate(
             serde_json::from_str(s).map_err(|e| invalid(format!("shard records: {e}")))?;
         records.append(&mut r);
     }
-    let result = py
-        .detach(|| pqrm::study::aggregate_monte_carlo(&cfg, &records))
+    let result = crate::pool::detach(py, || pqrm::study::aggregate_monte_carlo(&cfg, &records))
         .map_err(perr)?;
     serde_json::to_string(&result).map_err(|e| invalid(e.to_string()))
 }

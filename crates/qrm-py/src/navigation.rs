@@ -74,7 +74,7 @@ pub(crate) fn navigate(
     };
     let kind: ControllerKind = controller.parse().map_err(qlink_err)?;
     let landmarks: Vec<(u32, [f64; 2])> = pos.into_iter().collect();
-    let json = py.detach(move || -> Result<String, QlinkError> {
+    let json = crate::pool::detach(py, move || -> Result<String, QlinkError> {
         let map = QualitativeMap::new(vec![layer])?;
         let calc = map.layers()[0].calculus().clone();
         let graph = LinkGraph::new(&map, beta, |_, _, _| 1.0)?;
@@ -106,7 +106,7 @@ pub(crate) fn qlink_field(
     trials: Option<usize>,
     seed: u64,
 ) -> PyResult<String> {
-    py.detach(move || -> Result<String, QlinkError> {
+    crate::pool::detach(py, move || -> Result<String, QlinkError> {
         let mut params = if quick {
             qlink::field::FieldParams::quick(seed)
         } else {
@@ -149,7 +149,7 @@ pub(crate) fn qlink_study(
     seed: u64,
 ) -> PyResult<String> {
     let trial = trial.to_owned();
-    py.detach(move || -> Result<String, QlinkError> {
+    crate::pool::detach(py, move || -> Result<String, QlinkError> {
         let mut config = if quick {
             qlink::study::StudyConfig::quick(seed)
         } else {

@@ -179,7 +179,7 @@ pub(crate) fn serge_run(
     seed: u64,
 ) -> PyResult<SalientRegionMap> {
     let text = beliefs_json.to_owned();
-    py.detach(move || {
+    crate::pool::detach(py, move || {
         let beliefs = BeliefSet::from_json_str(&text, "beliefs")?;
         let g = match window {
             Some((a, b, c, d)) => Grid::new([a, b, c, d], grid, grid)?,
@@ -209,20 +209,19 @@ pub(crate) fn serge_cross_validate(
     seed: u64,
 ) -> PyResult<String> {
     let name = dataset.to_owned();
-    let records = py
-        .detach(move || {
-            let config = if quick {
-                serge::study::StudyConfig::quick(seed)
-            } else {
-                serge::study::StudyConfig::full(seed)
-            };
-            let mut data = serge::datasets::Dataset::generate(&name, seed)?;
-            if data.observations.is_some() {
-                data = data.with_samples(config.samples);
-            }
-            serge::study::cross_validate(&data, &config, &|| {})
-        })
-        .map_err(serge_err)?;
+    let records = crate::pool::detach(py, move || {
+        let config = if quick {
+            serge::study::StudyConfig::quick(seed)
+        } else {
+            serge::study::StudyConfig::full(seed)
+        };
+        let mut data = serge::datasets::Dataset::generate(&name, seed)?;
+        if data.observations.is_some() {
+            data = data.with_samples(config.samples);
+        }
+        serge::study::cross_validate(&data, &config, &|| {})
+    })
+    .map_err(serge_err)?;
     serde_json::to_string(&records).map_err(|e| invalid(e.to_string()))
 }
 
@@ -233,9 +232,7 @@ pub(crate) fn compose_cells(
     calculus: &Calculus,
 ) -> PyResult<std::collections::BTreeMap<String, std::collections::BTreeMap<String, Vec<String>>>> {
     let c = &calculus.inner;
-    let table = py
-        .detach(|| serge::learn::compose_table(c))
-        .map_err(serge_err)?;
+    let table = crate::pool::detach(py, || serge::learn::compose_table(c)).map_err(serge_err)?;
     Ok(c.states()
         .map(|r| {
             (

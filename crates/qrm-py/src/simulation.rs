@@ -25,9 +25,10 @@ pub(crate) fn simulate<'py>(
     lidar: bool,
 ) -> PyResult<Vec<Bound<'py, PyDict>>> {
     let name = scenario.to_owned();
-    let frames = py
-        .detach(|| sim2d::scenario(&name, seed, None).and_then(|sc| sc.run(seed, lidar)))
-        .map_err(sim_err)?;
+    let frames = crate::pool::detach(py, || {
+        sim2d::scenario(&name, seed, None).and_then(|sc| sc.run(seed, lidar))
+    })
+    .map_err(sim_err)?;
     let mut out = Vec::with_capacity(frames.len());
     for f in &frames {
         let d = PyDict::new(py);

@@ -7,7 +7,9 @@ region maps and learned calculi (`serge`, `SalientRegionMap`, `compose_cells`,
 `serge_cross_validate`); navigation with Q-Link (`navigate`, `qlink_study`,
 `qlink_field`).
 
-Every error is a `QrmError`; the subclasses say what kind (see the hierarchy in the stubs).
+Every error is a `QrmError`; the subclasses say what kind and are also the builtin a caller
+would catch (`InvalidInput` is a `ValueError`, `IoError` an `OSError`; see the stubs).
+The module is fork-safe: each process builds its own worker threads (`worker_threads()`).
 """
 from __future__ import annotations
 
@@ -30,6 +32,7 @@ from ._qrm import (
     compose_cells,
     read_observations,
     single_observation,
+    worker_threads,
 )
 from . import _qrm, sim
 
@@ -59,6 +62,7 @@ __all__ = [
     "serge_cross_validate",
     "sim",
     "single_observation",
+    "worker_threads",
 ]
 
 

@@ -29,31 +29,34 @@ __all__ = [
     "navigate",
     "qlink_study",
     "qlink_field",
+    "worker_threads",
     "__version__",
 ]
 
 class QrmError(Exception):
     """Base class of every qrm error."""
 
-class InvalidInput(QrmError):
+class InvalidInput(QrmError, ValueError):
     """Bad numbers, shapes, covariances or settings."""
 
 class DegenerateFrame(InvalidInput):
     """Coincident reference points or landmarks."""
 
-class SpecError(QrmError):
+class SpecError(QrmError, ValueError):
     """A calculus spec or name that is not valid."""
 
-class UnsupportedError(QrmError):
+class UnsupportedError(QrmError, NotImplementedError):
     """An operation the calculus does not define."""
 
-class FormatError(QrmError):
+class FormatError(QrmError, ValueError):
     """A malformed saved map or input file."""
 
-class IoError(QrmError):
+class IoError(QrmError, OSError):
     """A file that cannot be read or written."""
 
 def builtin_names() -> List[str]: ...
+def worker_threads() -> int:
+    """Worker threads of this process's (fork-safe) thread pool."""
 
 @final
 class Calculus:

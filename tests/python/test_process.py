@@ -1,0 +1,127 @@
+"""Python process-level behaviour: fork safety, catchable exceptions, the distribution name."""
+import importlib.metadata
+import os
+import pickle
+import subprocess
+import sys
+import textwrap
+
+import numpy as np
+import pytest
+
+import qrm
+
+# A child that inherits rayon's global pool (workers that fork did not copy) used to wait
+# forever; the script runs in its own interpreter so a hang is caught by the timeout, not by
+# the test runner hanging.
+FORK_AFTER_CALL = textwrap.dedent(
+    """
+    import multiprocessing as mp
+    from concurrent.futures import ProcessPoolExecutor
+    import numpy as np
+    import qrm
+
+    def work(seed):
+        edc = qrm.Calculus.builtin("edc")
+        rng = np.random.default_rng(seed)
+        ids = edc.classify(rng.normal(size=(20000, 6)))
+        m = qrm.Pqrm(edc, samples=200, seed=seed)
+        xy = np.array([[0.0, 0.0], [0.0, 5.0], [-1.0, 2.0], [2.0, 1.0]])
+        m.update(0.0, np.array([1, 2, 3, 4]), xy, np.array([[0.01, 0.0, 0.01]] * 4))
+        return int(ids.sum()), len(m), qrm.worker_threads()
+
+    if __name__ == "__main__":
+        parent = work(0)  # starts the parent's worker threads
+        assert parent[2] >= 1
+        ctx = mp.get_context("fork")
+        with ctx.Pool(2) as pool:
+            forked = pool.map(work, [0, 1, 2])
+        with ProcessPoolExecutor(2, mp_context=ctx) as ex:
+            executor = list(ex.map(work, [0, 1]))
+        assert forked[0][:2] == parent[:2], (forked[0], parent)
+        assert executor[0][:2] == parent[:2]
+        # the parent still works after its children
+        assert work(0)[:2] == parent[:2]
+        print("fork-ok", parent[0], forked[1][0])
+    """
+)
+
+
+@pytest.mark.skipif(sys.platform != "linux", reason="fork is the default start method on Linux only")
+def test_fork_pool_after_a_qrm_call_does_not_hang(tmp_path):
+    script = tmp_path / "fork_after_call.py"
+    script.write_text(FORK_AFTER_CALL)
+    env = dict(os.environ, RAYON_NUM_THREADS="2")
+    try:
+        done = subprocess.run(
+            [sys.executable, str(script)], capture_output=True, text=True, timeout=120, env=env
+        )
+    except subprocess.TimeoutExpired:
+        pytest.fail("a fork-based pool started after a qrm call hung (> 120 s)")
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.startswith("fork-ok"), done.stdout
+
+
+def test_worker_threads_follow_rayon_num_threads(tmp_path):
+    code = "import qrm; print(qrm.worker_threads())"
+    for n in ["1", "3"]:
+        out = subprocess.run(
+            [sys.executable, "-c", code],
+            capture_output=True, text=True, timeout=60,
+            env=dict(os.environ, RAYON_NUM_THREADS=n),
+        )
+        assert out.stdout.strip() == n, out.stderr
+
+
+@pytest.mark.parametrize(
+    "cls, builtin",
+    [
+        ("InvalidInput", ValueError),
+        ("DegenerateFrame", ValueError),
+        ("SpecError", ValueError),
+        ("FormatError", ValueError),
+        ("UnsupportedError", NotImplementedError),
+        ("IoError", OSError),
+    ],
+)
+def test_each_error_is_also_the_builtin_users_catch(cls, builtin):
+    exc = getattr(qrm, cls)
+    assert issubclass(exc, qrm.QrmError)
+    assert issubclass(exc, builtin)
+    assert exc.__module__ == "qrm"
+    # Errors cross process boundaries (multiprocessing, Ray) by pickle.
+    e = exc("a message")
+    back = pickle.loads(pickle.dumps(e))
+    assert type(back) is exc and str(back) == "a message"
+
+
+def test_raised_errors_are_caught_by_builtin_except_clauses(tmp_path):
+    edc = qrm.Calculus.builtin("edc")
+    with pytest.raises(ValueError, match="finite|NaN|nan"):
+        edc.classify(np.array([[0.0, 0.0, 0.0, 1.0, np.nan, 0.0]]))
+    with pytest.raises(ValueError):
+        edc.classify(np.array([[1.0, 1.0, 1.0, 1.0, 0.0, 0.0]]))  # coincident: DegenerateFrame
+    with pytest.raises(ValueError):
+        qrm.Calculus.builtin("no-such-calculus")
+    with pytest.raises(NotImplementedError):
+        qrm.Calculus.builtin("star-4").compose()
+    with pytest.raises(OSError) as info:
+        qrm.Calculus.from_spec(str(tmp_path / "missing.toml"))
+    assert isinstance(info.value, qrm.IoError)
+    bad = tmp_path / "bad.csv"
+    bad.write_text("t,robot,landmark,x,y,cxx,cxy,cyy\n0,0,1,zero,0,1,0,1\n")
+    with pytest.raises(ValueError) as info:
+        qrm.read_observations(str(bad), "csv")
+    assert isinstance(info.value, qrm.FormatError)
+    # A QrmError is still not caught by an unrelated builtin.
+    with pytest.raises(qrm.SpecError):
+        try:
+            qrm.Calculus.builtin("no-such-calculus")
+        except OSError:
+            pytest.fail("a spec error is not an OSError")
+
+
+def test_distribution_name_is_not_the_taken_one():
+    dists = importlib.metadata.packages_distributions().get("qrm", [])
+    assert dists == ["qrm-robotics"], dists
+    assert importlib.metadata.version("qrm-robotics") == qrm.__version__
