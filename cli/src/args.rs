@@ -36,6 +36,9 @@ pub enum Command {
     /// The whole pipeline: map the field site with a lidar, learn a calculus with SERGE,
     /// navigate with Q-Link; writes out/demo/run.mcap (Foxglove), summary.json, demo.svg.
     Demo(crate::demo_cmd::DemoArgs),
+    /// Qualitative reasoning over constraint networks: algebraic closure, scenarios.
+    #[command(subcommand)]
+    Reason(crate::reason_cmd::ReasonCmd),
 }
 
 /// `qrm pqrm ...`.

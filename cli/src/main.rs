@@ -16,6 +16,8 @@ mod plot;
 mod pqrm_cmd;
 mod progress;
 mod qlink_cmd;
+mod reason_cmd;
+mod reason_report;
 mod serge_cmd;
 mod sim_cmd;
 
@@ -33,6 +35,7 @@ fn main() -> ExitCode {
         args::Command::Serge(cmd) => serge_cmd::run(cmd),
         args::Command::Qlink(cmd) => qlink_cmd::run(cmd),
         args::Command::Demo(a) => demo_cmd::run(a),
+        args::Command::Reason(cmd) => reason_cmd::run(cmd),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -219,24 +219,7 @@ where
         .y_desc("y (normalised)")
         .draw()?;
     // The EDC's lines and circles, for orientation.
-    let grey = RGBColor(120, 120, 120).stroke_width(1);
-    chart.draw_series(std::iter::once(PathElement::new(
-        vec![(0.0, y0), (0.0, y1)],
-        grey,
-    )))?;
-    for y in [0.0, 0.5, 1.0] {
-        chart.draw_series(std::iter::once(PathElement::new(
-            vec![(x0, y), (x1, y)],
-            grey,
-        )))?;
-    }
-    for cy in [0.0, 1.0] {
-        let circle: Vec<(f64, f64)> = (0..=120)
-            .map(|k| f64::from(k) * std::f64::consts::TAU / 120.0)
-            .map(|t| (t.cos(), cy + t.sin()))
-            .collect();
-        chart.draw_series(std::iter::once(PathElement::new(circle, grey)))?;
-    }
+    draw_edc_guides(&mut chart, (x0, x1, y0, y1), RGBColor(120, 120, 120))?;
     let vmax = pts.iter().map(|p| p.2).fold(1e-9, f64::max);
     chart.draw_series(
         pts.iter()
@@ -757,5 +740,126 @@ pub fn region_map(stem: &Path, title: &str, picture: &RegionPicture<'_>) -> Resu
         stem,
         |r| draw_regions(r, title, picture),
         |r| draw_regions(r, title, picture),
+    )
+}
+
+/// The EDC's line AB, the perpendiculars at A, B and the midpoint, and the unit circles about
+/// A and B, in the normalised frame.
+fn draw_edc_guides<DB: DrawingBackend>(
+    chart: &mut ChartContext<
+        '_,
+        DB,
+        Cartesian2d<plotters::coord::types::RangedCoordf64, plotters::coord::types::RangedCoordf64>,
+    >,
+    (x0, x1, y0, y1): (f64, f64, f64, f64),
+    colour: RGBColor,
+) -> Drawn
+where
+    DB::ErrorType: 'static,
+{
+    let style = colour.stroke_width(1);
+    chart.draw_series(std::iter::once(PathElement::new(
+        vec![(0.0, y0), (0.0, y1)],
+        style,
+    )))?;
+    for y in [0.0, 0.5, 1.0] {
+        chart.draw_series(std::iter::once(PathElement::new(
+            vec![(x0, y), (x1, y)],
+            style,
+        )))?;
+    }
+    for cy in [0.0, 1.0] {
+        let circle: Vec<(f64, f64)> = (0..=120)
+            .map(|k| f64::from(k) * std::f64::consts::TAU / 120.0)
+            .map(|t| (t.cos(), cy + t.sin()))
+            .collect();
+        chart.draw_series(std::iter::once(PathElement::new(circle, style)))?;
+    }
+    Ok(())
+}
+
+fn draw_reference_pair<DB: DrawingBackend>(
+    root: &DrawingArea<DB, Shift>,
+    title: &str,
+    observed: &[(f64, f64, f64)],
+    inferred: &[(f64, f64, f64)],
+) -> Drawn
+where
+    DB::ErrorType: 'static,
+{
+    root.fill(&WHITE)?;
+    let all = observed.iter().chain(inferred);
+    let (mut x0, mut x1, mut y0, mut y1) = (-1.5f64, 1.5f64, -1.0f64, 2.0f64);
+    for (x, y, _) in all {
+        x0 = x0.min(*x);
+        x1 = x1.max(*x);
+        y0 = y0.min(*y);
+        y1 = y1.max(*y);
+    }
+    let pad = 0.08 * (x1 - x0).max(y1 - y0);
+    let (x0, x1, y0, y1) = (x0 - pad, x1 + pad, y0 - pad, y1 + pad);
+    let mut chart = ChartBuilder::on(root)
+        .margin(12)
+        .caption(title, ("sans-serif", 18))
+        .x_label_area_size(40)
+        .y_label_area_size(50)
+        .build_cartesian_2d(x0..x1, y0..y1)?;
+    chart
+        .configure_mesh()
+        .disable_mesh()
+        .x_desc("x in the frame of A→B (A at 0,0; B at 0,1)")
+        .y_desc("y")
+        .draw()?;
+    // The EDC's lines and unit circles (every built-in point calculus is a merge of it).
+    draw_edc_guides(&mut chart, (x0, x1, y0, y1), RGBColor(150, 150, 150))?;
+    // Colour-blind-safe ramp from vermillion (p = 0) to blue (p = 1).
+    let ramp = |p: f64| {
+        let p = p.clamp(0.0, 1.0);
+        let mix = |a: f64, b: f64| (a + (b - a) * p).round() as u8;
+        RGBColor(mix(213.0, 0.0), mix(94.0, 114.0), mix(0.0, 178.0))
+    };
+    chart.draw_series(std::iter::once(Circle::new((0.0, 0.0), 5, BLACK.filled())))?;
+    chart.draw_series(std::iter::once(Circle::new((0.0, 1.0), 5, BLACK.filled())))?;
+    chart
+        .draw_series(
+            observed
+                .iter()
+                .map(|(x, y, p)| Circle::new((*x, *y), 6, ramp(*p).filled())),
+        )?
+        .label("observed (map belief)")
+        .legend(|(x, y)| Circle::new((x, y), 5, RGBColor(0, 114, 178).filled()));
+    chart
+        .draw_series(
+            inferred
+                .iter()
+                .map(|(x, y, p)| TriangleMarker::new((*x, *y), 8, ramp(*p).filled())),
+        )?
+        .label("hidden, inferred")
+        .legend(|(x, y)| TriangleMarker::new((x, y), 7, RGBColor(0, 114, 178).filled()));
+    chart
+        .configure_series_labels()
+        .background_style(WHITE.mix(0.85))
+        .border_style(BLACK)
+        .draw()?;
+    root.draw(&Text::new(
+        "colour: probability of the true state, vermillion = 0 … blue = 1; black: A and B",
+        (70, SIZE.1 as i32 - 18),
+        ("sans-serif", 12),
+    ))?;
+    Ok(())
+}
+
+/// Every landmark in the frame of one reference pair: observed sets beside inferred ones,
+/// coloured by the probability of the true state.
+pub fn reference_pair(
+    stem: &Path,
+    title: &str,
+    observed: &[(f64, f64, f64)],
+    inferred: &[(f64, f64, f64)],
+) -> Result<Vec<PathBuf>> {
+    both(
+        stem,
+        |r| draw_reference_pair(r, title, observed, inferred),
+        |r| draw_reference_pair(r, title, observed, inferred),
     )
 }

@@ -67,7 +67,11 @@ fn prob(calculus: &str, samples: usize, seed: u64, floor: f64) -> Result<()> {
     Ok(())
 }
 
-fn load_dataset(format: &str, input: &Path, noise: RangeBearingNoise) -> Result<Dataset> {
+pub(crate) fn load_dataset(
+    format: &str,
+    input: &Path,
+    noise: RangeBearingNoise,
+) -> Result<Dataset> {
     ensure!(
         noise.sigma_range.is_finite()
             && noise.sigma_range >= 0.0

@@ -42,6 +42,8 @@ pub mod loaders;
 pub mod map;
 pub mod metrics;
 pub mod observation;
+pub mod reason;
+pub mod reason_study;
 pub mod sampler;
 pub mod study;
 

@@ -294,6 +294,21 @@ impl Pqrm {
         Some(out)
     }
 
+    /// Keeps only the recorded sets for which `keep` is true (e.g. to hide sets from a map
+    /// and test inference on them).
+    pub fn retain(&mut self, mut keep: impl FnMut(&LandmarkSet) -> bool) {
+        self.beliefs.retain(|s, _| keep(s));
+    }
+
+    /// Predicts `{a,b:d}` from the other beliefs of the map by composition (see
+    /// [`crate::reason`]), with the default options.
+    ///
+    /// # Errors
+    /// As [`crate::reason::infer_with`].
+    pub fn infer(&self, set: LandmarkSet) -> Result<crate::reason::Inference> {
+        crate::reason::infer(self, set)
+    }
+
     /// The stored belief record of a set (as recorded, no derivation).
     #[must_use]
     pub fn record(&self, set: &LandmarkSet) -> Option<&TripletBelief> {

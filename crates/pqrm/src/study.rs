@@ -246,7 +246,7 @@ struct TrialOutcome {
 }
 
 /// Landmarks and the observations of one trial (a world and the robot's loop).
-fn simulate_trial(
+pub(crate) fn simulate_trial(
     config: &MonteCarloConfig,
     sigma: f64,
     level: usize,

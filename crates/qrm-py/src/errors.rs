@@ -123,6 +123,7 @@ pub(crate) fn qsr(e: QsrError) -> PyErr {
             UnsupportedError::new_err(msg)
         }
         QsrError::Io { .. } => io_error(msg),
+        QsrError::Network { .. } => FormatError::new_err(msg),
         _ => QrmError::new_err(msg),
     }
 }

@@ -15,6 +15,7 @@ mod errors;
 mod mapping;
 mod navigation;
 mod pool;
+mod reasoning;
 mod regions;
 mod simulation;
 
@@ -41,6 +42,8 @@ fn _qrm(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(navigation::qlink_study, m)?)?;
     m.add_function(wrap_pyfunction!(navigation::qlink_field, m)?)?;
     m.add_function(wrap_pyfunction!(pool::worker_threads, m)?)?;
+    m.add_function(wrap_pyfunction!(reasoning::reason_close, m)?)?;
+    m.add_function(wrap_pyfunction!(reasoning::reason_scenario, m)?)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())
 }

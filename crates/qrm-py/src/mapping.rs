@@ -132,6 +132,53 @@ impl Pqrm {
             .map(|p| p.into_pyarray(py))
     }
 
+    /// A distribution for the ordered set (a, b, d) from the map's other beliefs through the
+    /// compose table (see `pqrm::reason`): {"p": array, "paths": int, "via": [ids], "round":
+    /// int, "alpha": float}. With `rounds > 1` sets never observed are inferred first in
+    /// rounds, so longer chains of composition contribute.
+    #[pyo3(signature = (set, *, fusion = "fitted", epsilon = 0.01, rounds = 1))]
+    fn infer<'py>(
+        &self,
+        py: Python<'py>,
+        set: (u32, u32, u32),
+        fusion: &str,
+        epsilon: f64,
+        rounds: usize,
+    ) -> PyResult<Bound<'py, PyDict>> {
+        let fusion: pqrm::reason::Fusion = fusion.parse().map_err(perr)?;
+        let options = pqrm::reason::InferOptions {
+            fusion,
+            epsilon,
+            rounds,
+        };
+        let map = &self.inner;
+        let (inf, alpha) = crate::pool::detach(py, || {
+            let mut inferrer = pqrm::reason::Inferrer::new(map, options)?;
+            if rounds > 1 {
+                inferrer.infer_unseen();
+            }
+            let inf = inferrer.infer(LandmarkSet::new(set.0, set.1, set.2))?;
+            Ok::<_, pqrm::PqrmError>((inf, inferrer.alpha()))
+        })
+        .map_err(perr)?;
+        let d = PyDict::new(py);
+        d.set_item("p", inf.p.into_pyarray(py))?;
+        d.set_item("paths", inf.paths)?;
+        d.set_item("via", inf.via)?;
+        d.set_item("round", inf.round)?;
+        d.set_item("alpha", alpha)?;
+        Ok(d)
+    }
+
+    /// The consistency check of the most likely states: {"sets", "consistent",
+    /// "contradiction", "flagged": [{"set", "state", "p"}], "closures"}.
+    fn check<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        let map = &self.inner;
+        let result = crate::pool::detach(py, || pqrm::reason::check(map)).map_err(perr)?;
+        let json = serde_json::to_string(&result).map_err(|e| invalid(e.to_string()))?;
+        py.import("json")?.call_method1("loads", (json,))
+    }
+
     /// Mean entropy over the recorded sets (nats), None for an empty map.
     fn entropy(&self) -> Option<f64> {
         self.inner.mean_entropy()

@@ -81,6 +81,14 @@ pub enum QsrError {
         /// The coarse states it meets.
         coarse_states: Vec<String>,
     },
+    /// A constraint network (JSON or SparQ text) is malformed.
+    #[error("invalid constraint network at {at}: {reason}")]
+    Network {
+        /// Where: a line and column, or the constraint's position.
+        at: String,
+        /// What is wrong there.
+        reason: String,
+    },
     /// A spec file could not be read.
     #[error("cannot read {path}: {source}")]
     Io {

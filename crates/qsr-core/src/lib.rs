@@ -26,6 +26,7 @@
 //! - `merge_*` goes from a finer calculus to a coarser one ([`Calculus::merge_map`],
 //!   [`MergeMap::merge_distribution`]).
 //! - `from_*` / `to_*` convert specs and frames.
+//! - Reasoning over constraint networks (closure, scenarios) lives in [`reason`].
 //!
 //! ## Conventions
 //! Normalised ternary frame: A = (0, 0), B = (0, 1), **x < 0 is left** of A→B (a proper
@@ -43,6 +44,7 @@
 //! | `Unsupported` | permutations/composition of non-ternary calculi |
 //! | `Arity` | wrong number of inputs, wrong frame kind, mismatched lengths |
 //! | `NotARefinement` | merging into a calculus that is not coarser |
+//! | `Network` | malformed constraint network (JSON or SparQ text), with line/column or constraint position |
 //! | `Io` | unreadable spec file |
 //!
 //! ```
@@ -70,6 +72,7 @@ mod merge;
 mod neighbours;
 mod partition;
 mod permute;
+pub mod reason;
 #[cfg(feature = "svg")]
 mod render;
 mod spec;
@@ -84,7 +87,7 @@ pub use frame::{
 pub use merge::MergeMap;
 pub use neighbours::NeighbourGraph;
 pub use partition::{ConstraintPartition, Partition, ROUNDING_MARGIN, RasterPartition};
-pub use permute::{Permutation, PermutationTable};
+pub use permute::{Permutation, PermutationTable, all_orderings};
 #[cfg(feature = "svg")]
 pub use render::{RenderOptions, register_font, render_svg};
 pub use spec::{

@@ -84,6 +84,14 @@ impl Permutation {
     }
 }
 
+/// The six orderings of `(a, b, c)`: the identity, then each operation of
+/// [`Permutation::ALL`] applied, in that order.
+#[must_use]
+pub fn all_orderings<T: Copy>(a: T, b: T, c: T) -> [(T, T, T); 6] {
+    let [i, s, si, h, hi] = Permutation::ALL.map(|op| op.apply(a, b, c));
+    [(a, b, c), i, s, si, h, hi]
+}
+
 impl fmt::Display for Permutation {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         f.write_str(self.name())
@@ -170,6 +178,31 @@ impl PermutationTable {
     #[must_use]
     pub fn rows(&self) -> &[Vec<StateId>] {
         &self.table
+    }
+
+    /// Number of states.
+    #[must_use]
+    pub fn n_states(&self) -> usize {
+        self.table.len()
+    }
+
+    /// A table computed elsewhere: `rows[r]` lists the states of the permuted relation when
+    /// the original is `r`. Each row is sorted and deduplicated here.
+    ///
+    /// # Errors
+    /// [`QsrError::Arity`] when a row names a state `≥ rows.len()`.
+    pub fn from_rows(op: Permutation, mut rows: Vec<Vec<StateId>>) -> crate::Result<Self> {
+        let n = rows.len();
+        for row in &mut rows {
+            if let Some(bad) = row.iter().find(|t| t.index() >= n) {
+                return Err(QsrError::Arity(format!(
+                    "`{op}` table names state {bad}, the table has {n} states"
+                )));
+            }
+            row.sort_unstable();
+            row.dedup();
+        }
+        Ok(Self { op, table: rows })
     }
 }
 

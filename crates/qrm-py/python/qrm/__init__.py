@@ -5,7 +5,8 @@ files (`read_observations`) and the thesis's Monte Carlo study, sharded for dist
 (`monte_carlo_config`, `monte_carlo_shard`, `monte_carlo_aggregate`, `monte_carlo`); salient
 region maps and learned calculi (`serge`, `SalientRegionMap`, `compose_cells`,
 `serge_cross_validate`); navigation with Q-Link (`navigate`, `qlink_study`,
-`qlink_field`).
+`qlink_field`); qualitative reasoning (`reason.close`, `reason.scenario`, `Pqrm.infer`,
+`Pqrm.check`).
 
 Every error is a `QrmError`; the subclasses say what kind and are also the builtin a caller
 would catch (`InvalidInput` is a `ValueError`, `IoError` an `OSError`; see the stubs).
@@ -34,7 +35,7 @@ from ._qrm import (
     single_observation,
     worker_threads,
 )
-from . import _qrm, sim
+from . import _qrm, reason, sim
 
 __all__ = [
     "Calculus",
@@ -57,6 +58,7 @@ __all__ = [
     "navigate",
     "qlink_study",
     "qlink_field",
+    "reason",
     "read_observations",
     "serge",
     "serge_cross_validate",

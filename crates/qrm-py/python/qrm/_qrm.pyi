@@ -30,6 +30,8 @@ __all__ = [
     "qlink_study",
     "qlink_field",
     "worker_threads",
+    "reason_close",
+    "reason_scenario",
     "__version__",
 ]
 
@@ -55,6 +57,10 @@ class IoError(QrmError, OSError):
     """A file that cannot be read or written."""
 
 def builtin_names() -> List[str]: ...
+def reason_close(calculus: Calculus, network: str, *, general_position: bool = False) -> str: ...
+def reason_scenario(
+    calculus: Calculus, network: str, *, general_position: bool = False, max_nodes: int = 100000
+) -> str: ...
 def worker_threads() -> int:
     """Worker threads of this process's (fork-safe) thread pool."""
 
@@ -116,6 +122,15 @@ class Pqrm:
     @staticmethod
     def load(path: str) -> Pqrm: ...
     def to_json(self) -> str: ...
+    def infer(
+        self,
+        set: Tuple[int, int, int],
+        *,
+        fusion: str = "fitted",
+        epsilon: float = 0.01,
+        rounds: int = 1,
+    ) -> Dict[str, object]: ...
+    def check(self) -> Dict[str, object]: ...
     def __len__(self) -> int: ...
 
 def read_observations(

@@ -1,0 +1,375 @@
+//! `qrm reason ...`: thin front end over `qsr_core::reason` (closure, scenarios).
+
+use std::io::Read;
+use std::path::PathBuf;
+
+use anyhow::{Context, Result, bail};
+use pqrm::reason::{Fusion, InferOptions, Inferrer};
+use qsr_core::Calculus;
+use qsr_core::reason::{
+    Algebra, Network, ScenarioOptions, ScenarioOutcome, TableScope, close, find_scenario,
+};
+use serde_json::json;
+
+use crate::output::write_atomic;
+
+/// `qrm reason ...` (raw flags).
+#[derive(Debug, clap::Subcommand)]
+pub enum ReasonCmd {
+    /// Algebraic closure of a constraint network read from stdin (or --input): prints
+    /// `{"consistent": bool, "constraints": [["A","B","C",["label",...]], ...]}` over every
+    /// ordered triplet of distinct points — the closed network, or the network when a
+    /// constraint became empty (the explanation goes to stderr).
+    Close(NetworkArgs),
+    /// One algebraically closed scenario refining the network (SparQ's
+    /// `scenario-consistency first`): `{"consistent": bool, "constraints": [...] | null}`.
+    Scenario(ScenarioArgs),
+    /// Consistency check of a saved PQRM map: the most likely entries closure contradicts,
+    /// and an irreducible set of them whose relaxation restores consistency (greedy by
+    /// belief), with their probabilities.
+    Check(CheckArgs),
+    /// Distributions for landmark sets never observed together, from the map's other
+    /// beliefs through the compose table (see `docs/reasoning.md` for the assumptions).
+    Infer(InferArgs),
+    /// The reasoning study: inference of hidden sets on a recording with surveyed truth,
+    /// inference of never-seen triplets in simulation, and the check's precision; report,
+    /// figures, JSON.
+    Study(ReasonStudyArgs),
+}
+
+/// `qrm reason check`.
+#[derive(Debug, clap::Args)]
+pub struct CheckArgs {
+    /// A saved map (`qrm map ... --out DIR` writes DIR/map.json).
+    pub map: PathBuf,
+    /// Print the result as JSON.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// `qrm reason infer`.
+#[derive(Debug, clap::Args)]
+pub struct InferArgs {
+    /// A saved map.
+    pub map: PathBuf,
+    /// Where to write the inferences (JSON).
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Ordered sets to infer, `A,B,D` (repeatable; default: every unordered set of the map's
+    /// landmarks never observed, in increasing-id order).
+    #[arg(long = "set", value_parser = parse_set)]
+    pub sets: Vec<[u32; 3]>,
+    /// How path predictions are combined.
+    #[arg(long, value_enum, default_value_t = FusionArg::Fitted)]
+    pub fusion: FusionArg,
+    /// Weight of uniform mixed into each path (0 ≤ ε < 1).
+    #[arg(long, default_value_t = pqrm::reason::InferOptions::default().epsilon)]
+    pub epsilon: f64,
+    /// Rounds of chained inference (round r composes what rounds before it inferred).
+    #[arg(long, default_value_t = pqrm::reason::InferOptions::default().rounds)]
+    pub rounds: usize,
+}
+
+/// `qrm reason study`.
+#[derive(Debug, clap::Args)]
+pub struct ReasonStudyArgs {
+    /// A small study (two calculi, two hidings, two worlds).
+    #[arg(long)]
+    pub quick: bool,
+    /// Recording format: mrclam (surveyed truth included) or csv (with --truth).
+    #[arg(long, default_value = "mrclam")]
+    pub format: String,
+    /// The recording (default: ../shared/data/mrclam-dataset7).
+    #[arg(long)]
+    pub input: Option<PathBuf>,
+    /// Surveyed truth for --format csv (`id,x,y`).
+    #[arg(long)]
+    pub truth: Option<PathBuf>,
+    /// Calculi (default: edc, double-cross, quadrant, left-right; quick: edc, double-cross).
+    #[arg(long, value_delimiter = ',')]
+    pub calculi: Option<Vec<String>>,
+    /// Use only the first N frames with three or more landmarks.
+    #[arg(long)]
+    pub max_frames: Option<usize>,
+    /// Seed.
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    /// Output directory.
+    #[arg(long)]
+    pub out: PathBuf,
+}
+
+/// Fusion rules (see `pqrm::reason::Fusion`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum FusionArg {
+    /// Mean of the path predictions.
+    Mixture,
+    /// Geometric mean (log-linear pool, weights 1/k).
+    Tempered,
+    /// Product (independent evidence).
+    Product,
+    /// Log-linear pool with weights k^(−α), α fitted on the map itself.
+    Fitted,
+}
+
+impl From<FusionArg> for Fusion {
+    fn from(f: FusionArg) -> Self {
+        match f {
+            FusionArg::Mixture => Fusion::Mixture,
+            FusionArg::Tempered => Fusion::Tempered,
+            FusionArg::Product => Fusion::Product,
+            FusionArg::Fitted => Fusion::Fitted,
+        }
+    }
+}
+
+fn parse_set(s: &str) -> std::result::Result<[u32; 3], String> {
+    let ids: Vec<u32> = s
+        .split(',')
+        .map(|t| t.trim().parse::<u32>().map_err(|e| format!("`{t}`: {e}")))
+        .collect::<std::result::Result<_, _>>()?;
+    match ids.as_slice() {
+        [a, b, d] if a != b && b != d && a != d => Ok([*a, *b, *d]),
+        [_, _, _] => Err(format!("`{s}` repeats a landmark")),
+        _ => Err(format!("`{s}`: expected three landmark ids A,B,D")),
+    }
+}
+
+/// Where a network comes from and how it is read.
+#[derive(Debug, clap::Args)]
+pub struct NetworkArgs {
+    /// Calculus name or spec file (ternary point calculi).
+    #[arg(long)]
+    pub calculus: String,
+    /// The network file (default: stdin).
+    #[arg(long)]
+    pub input: Option<PathBuf>,
+    /// Input form (default: by its first character, `{` JSON, `(` SparQ).
+    #[arg(long, value_enum)]
+    pub format: Option<NetworkFormat>,
+    /// Use tables of configurations in general position (SparQ's planar relations) instead of
+    /// the sound ones that include points on boundaries.
+    #[arg(long)]
+    pub general_position: bool,
+}
+
+/// `qrm reason scenario`.
+#[derive(Debug, clap::Args)]
+pub struct ScenarioArgs {
+    #[command(flatten)]
+    pub network: NetworkArgs,
+    /// The most search nodes before giving up (then an error).
+    #[arg(long, default_value_t = ScenarioOptions::default().max_nodes)]
+    pub max_nodes: usize,
+}
+
+/// Network file forms.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum NetworkFormat {
+    /// `{"constraints": [["A", "B", "C", ["label", ...]], ...]}`.
+    Json,
+    /// SparQ's `((A B (r1 r2) C) ...)`.
+    Sparq,
+}
+
+/// A validated network job (stage two of argument parsing).
+struct Loaded {
+    network: Network,
+    algebra: Algebra,
+}
+
+fn load(args: &NetworkArgs) -> Result<Loaded> {
+    let calculus = Calculus::resolve(&args.calculus)
+        .with_context(|| format!("loading calculus `{}`", args.calculus))?;
+    let (origin, text) = match &args.input {
+        Some(path) => (
+            path.display().to_string(),
+            std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?,
+        ),
+        None => {
+            let mut s = String::new();
+            std::io::stdin()
+                .read_to_string(&mut s)
+                .context("reading the network from stdin")?;
+            ("stdin".to_owned(), s)
+        }
+    };
+    let format = match args.format {
+        Some(f) => f,
+        None => match text.trim_start().chars().next() {
+            Some('{') => NetworkFormat::Json,
+            Some('(') => NetworkFormat::Sparq,
+            Some(c) => bail!(
+                "{origin}: cannot tell the network's form from its first character `{c}` \
+                 (JSON starts with `{{`, SparQ with `(`); say --format"
+            ),
+            None => bail!("{origin}: empty input, expected a constraint network"),
+        },
+    };
+    let network = match format {
+        NetworkFormat::Json => Network::from_json_str(&calculus, &text),
+        NetworkFormat::Sparq => Network::from_sparq_str(&calculus, &text),
+    }
+    .with_context(|| format!("reading the network from {origin}"))?;
+    let scope = if args.general_position {
+        TableScope::GeneralPosition
+    } else {
+        TableScope::Sound
+    };
+    let algebra = Algebra::of(&calculus, scope)
+        .with_context(|| format!("deriving the tables of `{}`", calculus.name()))?;
+    Ok(Loaded { network, algebra })
+}
+
+pub fn run(cmd: ReasonCmd) -> Result<()> {
+    match cmd {
+        ReasonCmd::Close(args) => {
+            let Loaded { network, algebra } = load(&args)?;
+            let closed = close(network, &algebra)?;
+            if let Some(c) = &closed.contradiction {
+                eprintln!("inconsistent: {}", c.describe(&closed.network));
+            }
+            let out = json!({
+                "consistent": closed.is_consistent(),
+                "constraints": closed.network.constraints_json(),
+            });
+            println!("{out}");
+            Ok(())
+        }
+        ReasonCmd::Scenario(args) => {
+            let Loaded { network, algebra } = load(&args.network)?;
+            let options = ScenarioOptions {
+                max_nodes: args.max_nodes,
+            };
+            match find_scenario(network, &algebra, &options)? {
+                ScenarioOutcome::Found(s) => {
+                    println!(
+                        "{}",
+                        json!({"consistent": true, "constraints": s.constraints_json()})
+                    );
+                    Ok(())
+                }
+                ScenarioOutcome::None => {
+                    println!("{}", json!({"consistent": false, "constraints": null}));
+                    Ok(())
+                }
+                ScenarioOutcome::GaveUp { nodes } => bail!(
+                    "no answer within {nodes} search nodes (raise --max-nodes to search longer)"
+                ),
+            }
+        }
+        ReasonCmd::Check(args) => check(&args),
+        ReasonCmd::Infer(args) => infer(&args),
+        ReasonCmd::Study(args) => crate::reason_report::study(&args),
+    }
+}
+
+fn load_map(path: &std::path::Path) -> Result<pqrm::Pqrm> {
+    pqrm::Pqrm::load(path).with_context(|| format!("loading the map {}", path.display()))
+}
+
+fn check(args: &CheckArgs) -> Result<()> {
+    let map = load_map(&args.map)?;
+    let result = pqrm::reason::check(&map)?;
+    if args.json {
+        println!("{}", serde_json::to_string_pretty(&result)?);
+        return Ok(());
+    }
+    println!(
+        "{} sets of `{}`: the most likely states {} closure",
+        result.sets,
+        map.calculus().name(),
+        if result.consistent { "pass" } else { "fail" }
+    );
+    if let Some(c) = &result.contradiction {
+        println!("first contradiction: {c}");
+    }
+    if !result.flagged.is_empty() {
+        println!(
+            "{} entries to relax (irreducible, chosen greedily by belief; {} closures):",
+            result.flagged.len(),
+            result.closures
+        );
+        println!("{:<18} {:<16} {:>8}", "set", "ML state", "P(ML)");
+        for f in &result.flagged {
+            println!(
+                "{:<18} {:<16} {:>8.4}",
+                format!("{:?}", f.set),
+                f.state,
+                f.p
+            );
+        }
+    }
+    Ok(())
+}
+
+fn infer(args: &InferArgs) -> Result<()> {
+    let map = load_map(&args.map)?;
+    let options = InferOptions {
+        fusion: args.fusion.into(),
+        epsilon: args.epsilon,
+        rounds: args.rounds,
+    };
+    let landmarks: Vec<u32> = pqrm::reason::landmarks(&map).iter().map(|l| l.0).collect();
+    for set in &args.sets {
+        if let Some(id) = set.iter().find(|id| !landmarks.contains(id)) {
+            bail!("landmark {id} is not in the map (its landmarks: {landmarks:?})");
+        }
+    }
+    let mut inferrer = Inferrer::new(&map, options)?;
+    let unseen = inferrer.infer_unseen();
+    let inferences: Vec<pqrm::reason::Inference> = if args.sets.is_empty() {
+        unseen
+    } else {
+        let round_of: std::collections::BTreeMap<[u32; 3], usize> =
+            unseen.iter().map(|i| (i.set, i.round)).collect();
+        args.sets
+            .iter()
+            .map(|[a, b, d]| {
+                let mut inf = inferrer.infer(pqrm::LandmarkSet::new(*a, *b, *d))?;
+                let mut key = [*a, *b, *d];
+                key.sort_unstable();
+                if let Some(r) = round_of.get(&key) {
+                    inf.round = *r;
+                }
+                Ok(inf)
+            })
+            .collect::<Result<_>>()?
+    };
+    let calc = map.calculus();
+    let uniform_entropy = (calc.n_states() as f64).ln();
+    let mut informative = 0;
+    let mut rows = Vec::with_capacity(inferences.len());
+    for inf in &inferences {
+        let h = pqrm::metrics::entropy(&inf.p);
+        informative += usize::from(h < uniform_entropy - 0.05);
+        rows.push(json!({
+            "set": inf.set,
+            "ml": calc.label(inf.ml_state()),
+            "p": inf.p,
+            "entropy": h,
+            "paths": inf.paths,
+            "round": inf.round,
+            "via": inf.via,
+        }));
+    }
+    let sets = &inferences;
+    let out = json!({
+        "calculus": calc.name(),
+        "states": calc.labels(),
+        "fusion": Fusion::from(args.fusion).name(),
+        "alpha": inferrer.alpha(),
+        "epsilon": args.epsilon,
+        "rounds": args.rounds,
+        "inferences": rows,
+    });
+    write_atomic(&args.out, serde_json::to_string_pretty(&out)?.as_bytes())?;
+    println!(
+        "inferred {} sets of `{}` ({} more informative than uniform); wrote {}",
+        sets.len(),
+        calc.name(),
+        informative,
+        args.out.display()
+    );
+    Ok(())
+}

@@ -1,0 +1,283 @@
+//! `qrm reason close|scenario|check|infer|study` as a user runs them, including the narrow
+//! JSON interface of `qrm reason close` that acceptance checks use.
+#![allow(clippy::unwrap_used)] // tests: a panic is the failure report
+
+mod common;
+
+use common::{ok, qrm};
+
+use std::path::{Path, PathBuf};
+
+use serde_json::Value;
+
+fn tmp(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("qrm-reason-cli-{}-{name}", std::process::id()));
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+fn triplet_map(v: &Value) -> std::collections::BTreeMap<(String, String, String), Vec<String>> {
+    v["constraints"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|c| {
+            let s = |i: usize| c[i].as_str().unwrap().to_owned();
+            let labels = c[3]
+                .as_array()
+                .unwrap()
+                .iter()
+                .map(|l| l.as_str().unwrap().to_owned())
+                .collect();
+            ((s(0), s(1), s(2)), labels)
+        })
+        .collect()
+}
+
+#[test]
+fn close_prints_the_closed_network_over_every_ordered_triplet() {
+    // C left-front of A→B and D left-front of B→C: closure bounds {A,B:D} and fills the
+    // permuted orderings; nothing else was said.
+    let input =
+        r#"{"constraints": [["A", "B", "C", ["left-front"]], ["B", "C", "D", ["left-front"]]]}"#;
+    let out = ok(&["reason", "close", "--calculus", "double-cross"], input);
+    let v: Value = serde_json::from_str(&out).unwrap();
+    let keys: Vec<&str> = v.as_object().unwrap().keys().map(String::as_str).collect();
+    assert_eq!(keys, ["consistent", "constraints"]);
+    assert_eq!(v["consistent"], true);
+    let m = triplet_map(&v);
+    assert_eq!(m.len(), 4 * 3 * 2, "every ordered triplet of 4 points");
+    let key = |a: &str, b: &str, c: &str| (a.to_owned(), b.to_owned(), c.to_owned());
+    assert_eq!(m[&key("A", "B", "C")], ["left-front"]);
+    // Inverse of left-front (sound table: the boundary case on the perpendicular at B too).
+    assert!(m[&key("B", "A", "C")].contains(&"right-back".to_owned()));
+    assert!(!m[&key("B", "A", "C")].contains(&"left-front".to_owned()));
+    // {A,B:D} is narrowed to the left half: C ahead-left of A→B makes B→C head up and to
+    // the left, and the left of B→C ahead of C lies left of A→B.
+    let abd = &m[&key("A", "B", "D")];
+    assert_eq!(abd, &["left-front", "left-middle", "left-back"]);
+}
+
+#[test]
+fn close_reports_an_inconsistent_network_and_explains_it() {
+    let input = r#"{"constraints": [["A", "B", "C", ["left"]], ["B", "A", "C", ["left"]], ["A", "B", "D", ["right"]]]}"#;
+    let out = qrm(&["reason", "close", "--calculus", "left-right"], input);
+    assert!(out.status.success());
+    let v: Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(v["consistent"], false);
+    let m = triplet_map(&v);
+    assert!(
+        m.values().any(Vec::is_empty),
+        "the emptied constraint is in the output"
+    );
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("became empty"), "{err}");
+}
+
+#[test]
+fn close_reads_sparq_networks() {
+    let json = ok(
+        &["reason", "close", "--calculus", "double-cross"],
+        r#"{"constraints": [["A", "B", "C", ["left-front", "left-middle"]], ["B", "C", "D", ["right-back"]]]}"#,
+    );
+    let sparq = ok(
+        &["reason", "close", "--calculus", "double-cross"],
+        "((A B (left-front left-middle) C)\n (B C right-back D))",
+    );
+    assert_eq!(json, sparq);
+}
+
+#[test]
+fn bad_networks_fail_with_the_place_and_the_cause() {
+    for (input, needle) in [
+        (
+            r#"{"constraints": [["A", "B", "C", ["sideways"]]]}"#,
+            "sideways",
+        ),
+        (r#"{"constraints": [["A", "B", "C", ["left"]"#, "line 1"),
+        ("((A B (left) C)", "never closed"),
+        ("hello", "first character"),
+        ("", "empty input"),
+    ] {
+        let out = qrm(&["reason", "close", "--calculus", "left-right"], input);
+        assert!(!out.status.success(), "{input} was accepted");
+        assert_eq!(out.status.code(), Some(1), "typed error, no panic");
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(err.contains(needle), "`{err}` does not say `{needle}`");
+    }
+    let out = qrm(
+        &["reason", "close", "--calculus", "star-4"],
+        r#"{"constraints": []}"#,
+    );
+    assert_eq!(out.status.code(), Some(1));
+}
+
+#[test]
+fn scenario_finds_one_or_says_none() {
+    let out = ok(
+        &["reason", "scenario", "--calculus", "double-cross"],
+        r#"{"constraints": [["A", "B", "C", ["left-front", "right-back"]], ["A", "B", "D", ["left-back"]]]}"#,
+    );
+    let v: Value = serde_json::from_str(&out).unwrap();
+    assert_eq!(v["consistent"], true);
+    assert!(triplet_map(&v).values().all(|l| l.len() == 1));
+    let out = ok(
+        &["reason", "scenario", "--calculus", "left-right"],
+        r#"{"constraints": [["A", "B", "C", ["left"]], ["B", "A", "C", ["left"]]]}"#,
+    );
+    let v: Value = serde_json::from_str(&out).unwrap();
+    assert_eq!(v["consistent"], false);
+    assert!(v["constraints"].is_null());
+}
+
+/// Observations of 8 landmarks from two stops that see overlapping halves.
+fn small_map(dir: &Path) -> PathBuf {
+    // No triplet within 1 % (relative) of a double-cross line: the ML states are the truth.
+    let pts: [(u32, f64, f64); 8] = [
+        (1, -0.22, -0.44),
+        (2, 3.35, 1.49),
+        (3, 0.59, 4.3),
+        (4, 4.91, 4.65),
+        (5, 7.79, 2.27),
+        (6, 9.37, 5.54),
+        (7, 12.11, 0.54),
+        (8, 13.22, 4.83),
+    ];
+    let mut csv = String::from("t,robot,landmark,x,y,cxx,cxy,cyy\n");
+    for (t, lo, hi) in [(0, 1, 5), (1, 3, 8), (2, 1, 5), (3, 3, 8)] {
+        for (id, x, y) in pts.iter().filter(|(id, _, _)| (lo..=hi).contains(id)) {
+            csv.push_str(&format!("{t},0,{id},{x},{y},0.000001,0,0.000001\n"));
+        }
+    }
+    let obs = dir.join("obs.csv");
+    std::fs::write(&obs, csv).unwrap();
+    ok(
+        &[
+            "map",
+            "--format",
+            "csv",
+            "--input",
+            obs.to_str().unwrap(),
+            "--calculus",
+            "double-cross",
+            "--samples",
+            "200",
+            "--out",
+            dir.to_str().unwrap(),
+        ],
+        "",
+    );
+    dir.join("map.json")
+}
+
+#[test]
+fn check_and_infer_work_on_a_saved_map() {
+    let dir = tmp("map");
+    let map = small_map(&dir);
+    let out = ok(&["reason", "check", map.to_str().unwrap(), "--json"], "");
+    let v: Value = serde_json::from_str(&out).unwrap();
+    assert_eq!(v["consistent"], true, "{out}");
+    assert_eq!(v["flagged"].as_array().unwrap().len(), 0);
+    // {1,2,8} was never seen together (1 and 8 are in different halves).
+    let inferred = dir.join("inferred.json");
+    let out = ok(
+        &[
+            "reason",
+            "infer",
+            map.to_str().unwrap(),
+            "--out",
+            inferred.to_str().unwrap(),
+        ],
+        "",
+    );
+    assert!(out.contains("inferred"), "{out}");
+    let v: Value = serde_json::from_str(&std::fs::read_to_string(&inferred).unwrap()).unwrap();
+    let rows = v["inferences"].as_array().unwrap();
+    let row = rows
+        .iter()
+        .find(|r| r["set"] == serde_json::json!([1, 2, 8]))
+        .expect("the unseen set {1,2,8} is inferred");
+    let p: Vec<f64> = row["p"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|x| x.as_f64().unwrap())
+        .collect();
+    assert!((p.iter().sum::<f64>() - 1.0).abs() < 1e-9);
+    assert!(row["round"].as_u64().unwrap() >= 1, "{row}");
+    // 8 is right of 1→2 and ahead of 2: right-front.
+    assert_eq!(row["ml"], "right-front", "{row}");
+    // An explicit set, and a landmark the map does not have.
+    ok(
+        &[
+            "reason",
+            "infer",
+            map.to_str().unwrap(),
+            "--set",
+            "8,1,2",
+            "--out",
+            inferred.to_str().unwrap(),
+        ],
+        "",
+    );
+    let out = qrm(
+        &[
+            "reason",
+            "infer",
+            map.to_str().unwrap(),
+            "--set",
+            "1,2,99",
+            "--out",
+            inferred.to_str().unwrap(),
+        ],
+        "",
+    );
+    assert_eq!(out.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("99"));
+}
+
+#[test]
+fn study_runs_on_mrclam_and_judges_its_claims() {
+    let data = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../shared/data/mrclam-dataset7");
+    if !data.is_dir() {
+        eprintln!("SKIPPED: shared/data/mrclam-dataset7 not found");
+        return;
+    }
+    let out = tmp("study");
+    ok(
+        &[
+            "reason",
+            "study",
+            "--quick",
+            "--calculi",
+            "double-cross",
+            "--max-frames",
+            "300",
+            "--input",
+            data.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+        ],
+        "",
+    );
+    for f in [
+        "reason.json",
+        "scores.csv",
+        "report.md",
+        "reliability_double-cross.svg",
+        "reliability_double-cross.png",
+        "reference_pair_double-cross.svg",
+    ] {
+        assert!(out.join(f).is_file(), "{f} missing");
+    }
+    let v: Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("reason.json")).unwrap()).unwrap();
+    let r = &v["results"][0];
+    let inferred = r["hidden"]["inferred"]["fitted"]["error_rate"]
+        .as_f64()
+        .unwrap();
+    let random = r["hidden"]["random"]["error_rate"].as_f64().unwrap();
+    assert!(inferred < random, "inference {inferred} vs random {random}");
+    let report = std::fs::read_to_string(out.join("report.md")).unwrap();
+    assert!(report.contains("| claim | ours | holds |"));
+}

@@ -1,0 +1,515 @@
+//! Inference of relations between landmarks never observed together (see the module docs of
+//! [`crate::reason`] for the assumptions).
+
+use std::collections::{BTreeMap, BTreeSet};
+
+use qsr_core::reason::{Algebra, TableScope};
+use qsr_core::{Permutation, StateId};
+use serde::{Deserialize, Serialize};
+
+use crate::error::{PqrmError, Result};
+use crate::likelihood::LandmarkSet;
+use crate::map::Pqrm;
+use crate::reason::network::{canonical, landmarks, observed_sets, orderings};
+
+/// How the predictions of several paths are combined.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Fusion {
+    /// The mean of the path predictions (linear pool).
+    Mixture,
+    /// The normalised geometric mean (log-linear pool with weights 1/k).
+    Tempered,
+    /// The normalised product (independent evidence).
+    Product,
+    /// The log-linear pool with weights `k^(−α)`, α ∈ [0, 1] fitted on the map itself (between
+    /// the product, α = 0, and the tempered product, α = 1): each observed set is predicted
+    /// from the others and α minimises the cross-entropy against the map's own belief — no
+    /// ground truth is used.
+    #[default]
+    Fitted,
+}
+
+impl Fusion {
+    /// All four, in declaration order.
+    pub const ALL: [Fusion; 4] = [Self::Mixture, Self::Tempered, Self::Product, Self::Fitted];
+
+    /// The kebab-case name.
+    #[must_use]
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Mixture => "mixture",
+            Self::Tempered => "tempered",
+            Self::Product => "product",
+            Self::Fitted => "fitted",
+        }
+    }
+}
+
+impl std::str::FromStr for Fusion {
+    type Err = PqrmError;
+
+    fn from_str(s: &str) -> Result<Self> {
+        Self::ALL
+            .into_iter()
+            .find(|f| f.name() == s)
+            .ok_or_else(|| {
+                PqrmError::InvalidConfig(format!(
+                    "unknown fusion `{s}` (expected mixture, tempered, product or fitted)"
+                ))
+            })
+    }
+}
+
+/// Settings of an [`Inferrer`].
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct InferOptions {
+    /// How paths are combined.
+    pub fusion: Fusion,
+    /// Weight of the uniform distribution mixed into each path before fusing (0 ≤ ε < 1).
+    pub epsilon: f64,
+    /// Rounds of [`Inferrer::infer_unseen`]: round 1 uses observed beliefs only, round r
+    /// also the sets inferred in rounds 1 … r−1 (longer chains of composition).
+    pub rounds: usize,
+}
+
+impl Default for InferOptions {
+    fn default() -> Self {
+        Self {
+            fusion: Fusion::default(),
+            epsilon: 0.01,
+            rounds: 3,
+        }
+    }
+}
+
+impl InferOptions {
+    /// Checks the settings.
+    ///
+    /// # Errors
+    /// [`PqrmError::InvalidConfig`] for ε outside [0, 1) or rounds outside 1..=16.
+    pub fn validate(&self) -> Result<()> {
+        if !(0.0..1.0).contains(&self.epsilon) {
+            return Err(PqrmError::InvalidConfig(format!(
+                "epsilon must be in [0, 1), got {}",
+                self.epsilon
+            )));
+        }
+        if !(1..=16).contains(&self.rounds) {
+            return Err(PqrmError::InvalidConfig(format!(
+                "rounds must be in 1..=16, got {}",
+                self.rounds
+            )));
+        }
+        Ok(())
+    }
+}
+
+/// A predicted distribution over the states of one ordered set.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Inference {
+    /// The set `{a, b : d}`.
+    pub set: [u32; 3],
+    /// Probabilities in state order (uniform when no path exists).
+    pub p: Vec<f64>,
+    /// Number of paths combined.
+    pub paths: usize,
+    /// The fourth landmarks that gave at least one path.
+    pub via: Vec<u32>,
+    /// The round that inferred it (1: from observed beliefs only; 0: no path, uniform).
+    pub round: usize,
+}
+
+impl Inference {
+    /// The most likely state (lowest id on ties).
+    #[must_use]
+    pub fn ml_state(&self) -> StateId {
+        let mut best = 0;
+        for (i, p) in self.p.iter().enumerate() {
+            if *p > self.p[best] {
+                best = i;
+            }
+        }
+        StateId(best as u16)
+    }
+}
+
+/// A prediction per ordering of one unordered set.
+type Predictions = Vec<(LandmarkSet, Vec<f64>)>;
+
+/// Inference over one map: the tables, the fitted pooling weight, and the sets inferred so
+/// far.
+#[derive(Debug, Clone)]
+pub struct Inferrer<'m> {
+    map: &'m Pqrm,
+    algebra: Algebra,
+    /// `comp[r][s]`: the states of `r ∘ s`, as a list.
+    comp: Vec<Vec<Vec<StateId>>>,
+    /// `perm[op][t]`.
+    perm: Vec<Vec<Vec<StateId>>>,
+    options: InferOptions,
+    alpha: f64,
+    landmarks: Vec<u32>,
+    inferred: BTreeMap<LandmarkSet, Vec<f64>>,
+}
+
+/// The grid α is fitted on.
+const ALPHA_GRID: [f64; 11] = [0.0, 0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9, 1.0];
+
+/// At most this many observed sets are used to fit α (spread evenly over the map).
+const FIT_SETS: usize = 400;
+
+impl<'m> Inferrer<'m> {
+    /// Prepares inference over `map` with the calculus's general-position tables (a noisy
+    /// sensor puts no probability on boundaries); fits α for [`Fusion::Fitted`].
+    ///
+    /// # Errors
+    /// [`PqrmError::InvalidConfig`] for bad options; [`PqrmError::Calculus`] when the calculus
+    /// has no ternary tables.
+    pub fn new(map: &'m Pqrm, options: InferOptions) -> Result<Self> {
+        let algebra = Algebra::of(map.calculus(), TableScope::GeneralPosition)?;
+        Self::with_algebra(map, algebra, options)
+    }
+
+    /// As [`Inferrer::new`] with tables computed elsewhere (e.g. a learned calculus's
+    /// Algorithm 3 table).
+    ///
+    /// # Errors
+    /// As [`Inferrer::new`]; [`PqrmError::Mismatch`] when the tables have another state count.
+    pub fn with_algebra(map: &'m Pqrm, algebra: Algebra, options: InferOptions) -> Result<Self> {
+        options.validate()?;
+        let q = map.calculus().n_states();
+        if algebra.n_states() != q {
+            return Err(PqrmError::Mismatch(format!(
+                "tables of {} states for a map of {q}",
+                algebra.n_states()
+            )));
+        }
+        let id = |i: usize| StateId(i as u16);
+        let comp = (0..q)
+            .map(|r| {
+                (0..q)
+                    .map(|s| algebra.compose(id(r), id(s)).iter().collect())
+                    .collect()
+            })
+            .collect();
+        let perm = Permutation::ALL
+            .iter()
+            .map(|op| {
+                (0..q)
+                    .map(|t| algebra.permute(*op, id(t)).iter().collect())
+                    .collect()
+            })
+            .collect();
+        let mut me = Self {
+            map,
+            algebra,
+            comp,
+            perm,
+            options,
+            alpha: 1.0,
+            landmarks: landmarks(map).iter().map(|l| l.0).collect(),
+            inferred: BTreeMap::new(),
+        };
+        if options.fusion == Fusion::Fitted {
+            me.alpha = me.fit_alpha();
+        }
+        Ok(me)
+    }
+
+    /// The fitted α (1 unless the fusion is [`Fusion::Fitted`]).
+    #[must_use]
+    pub fn alpha(&self) -> f64 {
+        self.alpha
+    }
+
+    /// The tables in use.
+    #[must_use]
+    pub fn algebra(&self) -> &Algebra {
+        &self.algebra
+    }
+
+    /// The belief of an ordered set: observed, else inferred in an earlier round.
+    fn belief(&self, set: LandmarkSet) -> Option<Vec<f64>> {
+        self.map
+            .belief(set)
+            .or_else(|| self.inferred.get(&set).cloned())
+    }
+
+    /// The predictions of every path to `{a,b:d}` and the fourth landmarks that gave them.
+    #[must_use]
+    pub fn paths(&self, set: LandmarkSet) -> (Vec<Vec<f64>>, Vec<u32>) {
+        let [a, b, d] = set.ids();
+        let q = self.algebra.n_states();
+        // (x, y, z) = op(a, b, d) and the permutation back from (x, y, z) to (a, b, d).
+        let mut shapes: Vec<([u32; 3], Option<Permutation>)> = vec![([a, b, d], None)];
+        for op in Permutation::ALL {
+            let (x, y, z) = op.apply(a, b, d);
+            let back = Permutation::ALL
+                .into_iter()
+                .find(|o| o.apply(x, y, z) == (a, b, d));
+            shapes.push(([x, y, z], back));
+        }
+        let mut paths = Vec::new();
+        let mut via = Vec::new();
+        for &c in &self.landmarks {
+            if c == a || c == b || c == d {
+                continue;
+            }
+            let mut used = false;
+            for ([x, y, z], back) in &shapes {
+                let (Some(p1), Some(p2)) = (
+                    self.belief(LandmarkSet::new(*x, *y, c)),
+                    self.belief(LandmarkSet::new(*y, c, *z)),
+                ) else {
+                    continue;
+                };
+                let mut pred = vec![0.0; q];
+                for (r, pr) in p1.iter().enumerate() {
+                    if *pr < 1e-12 {
+                        continue;
+                    }
+                    for (s, ps) in p2.iter().enumerate() {
+                        let w = pr * ps;
+                        let targets = &self.comp[r][s];
+                        if w < 1e-15 || targets.is_empty() {
+                            continue;
+                        }
+                        let share = w / targets.len() as f64;
+                        for t in targets {
+                            pred[t.index()] += share;
+                        }
+                    }
+                }
+                let total: f64 = pred.iter().sum();
+                if total <= 0.0 {
+                    continue;
+                }
+                pred.iter_mut().for_each(|v| *v /= total);
+                if let Some(op) = back {
+                    let table = &self.perm[*op as usize];
+                    let mut out = vec![0.0; q];
+                    for (t, pt) in pred.iter().enumerate() {
+                        let targets = &table[t];
+                        for u in targets {
+                            out[u.index()] += pt / targets.len() as f64;
+                        }
+                    }
+                    pred = out;
+                }
+                paths.push(pred);
+                used = true;
+            }
+            if used {
+                via.push(c);
+            }
+        }
+        (paths, via)
+    }
+
+    /// Combines path predictions with `fusion` (α for the fitted one is this inferrer's).
+    #[must_use]
+    pub fn fuse(&self, paths: &[Vec<f64>], fusion: Fusion) -> Vec<f64> {
+        let q = self.algebra.n_states();
+        let k = paths.len().max(1) as f64;
+        let weight = match fusion {
+            Fusion::Mixture => return fuse_mixture(paths, q, self.options.epsilon),
+            Fusion::Product => 1.0,
+            Fusion::Tempered => 1.0 / k,
+            Fusion::Fitted => k.powf(-self.alpha),
+        };
+        fuse_log_linear(paths, q, self.options.epsilon, weight)
+    }
+
+    /// Predicts `{a,b:d}` from the beliefs (observed, and inferred by earlier calls of
+    /// [`Inferrer::infer_unseen`]).
+    ///
+    /// # Errors
+    /// [`PqrmError::InvalidConfig`] for a set with a repeated landmark.
+    pub fn infer(&self, set: LandmarkSet) -> Result<Inference> {
+        let [a, b, d] = set.ids();
+        if a == b || b == d || a == d {
+            return Err(PqrmError::InvalidConfig(format!(
+                "set {:?} repeats a landmark",
+                set.ids()
+            )));
+        }
+        let (paths, via) = self.paths(set);
+        Ok(Inference {
+            set: set.ids(),
+            p: self.fuse(&paths, self.options.fusion),
+            paths: paths.len(),
+            round: usize::from(!paths.is_empty()),
+            via,
+        })
+    }
+
+    /// Infers every unordered set of the map's landmarks that was never observed, in rounds
+    /// ([`InferOptions::rounds`]); returns one inference per set (its increasing-id
+    /// ordering), in id order. Sets still without a path after the last round are uniform
+    /// (`round` 0). Round r sees only what rounds before it inferred, so the result does not
+    /// depend on the order of the sets.
+    pub fn infer_unseen(&mut self) -> Vec<Inference> {
+        let seen: BTreeSet<LandmarkSet> = observed_sets(self.map).into_iter().collect();
+        let ids = self.landmarks.clone();
+        let mut unseen = Vec::new();
+        for (i, a) in ids.iter().enumerate() {
+            for (j, b) in ids.iter().enumerate().skip(i + 1) {
+                for d in ids.iter().skip(j + 1) {
+                    let s = LandmarkSet::new(*a, *b, *d);
+                    if !seen.contains(&s) {
+                        unseen.push(s);
+                    }
+                }
+            }
+        }
+        let mut result: BTreeMap<LandmarkSet, Inference> = BTreeMap::new();
+        for round in 1..=self.options.rounds {
+            // (the set, each ordering's fused prediction, the set's inference)
+            let mut new: Vec<(LandmarkSet, Predictions, Inference)> = Vec::new();
+            for s in unseen.iter().filter(|s| !result.contains_key(s)) {
+                let per_ordering: Vec<(LandmarkSet, Vec<Vec<f64>>, Vec<u32>)> = orderings(*s)
+                    .into_iter()
+                    .map(|o| {
+                        let (p, v) = self.paths(o);
+                        (o, p, v)
+                    })
+                    .collect();
+                if per_ordering.iter().all(|(_, p, _)| p.is_empty()) {
+                    continue;
+                }
+                let fused: Vec<(LandmarkSet, Vec<f64>)> = per_ordering
+                    .iter()
+                    .map(|(o, p, _)| (*o, self.fuse(p, self.options.fusion)))
+                    .collect();
+                let (_, p0, v0) = &per_ordering[0];
+                let inf = Inference {
+                    set: s.ids(),
+                    p: fused[0].1.clone(),
+                    paths: p0.len(),
+                    via: v0.clone(),
+                    round,
+                };
+                new.push((*s, fused, inf));
+            }
+            if new.is_empty() {
+                break;
+            }
+            for (s, fused, inf) in new {
+                for (o, p) in fused {
+                    self.inferred.insert(o, p);
+                }
+                result.insert(s, inf);
+            }
+        }
+        let q = self.algebra.n_states();
+        unseen
+            .into_iter()
+            .map(|s| {
+                result.remove(&s).unwrap_or_else(|| Inference {
+                    set: s.ids(),
+                    p: vec![1.0 / q as f64; q],
+                    paths: 0,
+                    via: Vec::new(),
+                    round: 0,
+                })
+            })
+            .collect()
+    }
+
+    /// The inferred belief of an ordered set after [`Inferrer::infer_unseen`].
+    #[must_use]
+    pub fn inferred(&self, set: LandmarkSet) -> Option<&[f64]> {
+        self.inferred.get(&set).map(Vec::as_slice)
+    }
+
+    /// α minimising the mean cross-entropy between each observed set's belief and its
+    /// prediction from the other sets (leave-one-out: a set's own paths never use it).
+    fn fit_alpha(&self) -> f64 {
+        let sets = observed_sets(self.map);
+        let stride = sets.len().div_ceil(FIT_SETS).max(1);
+        let q = self.algebra.n_states();
+        let samples: Vec<(Vec<Vec<f64>>, Vec<f64>)> = sets
+            .iter()
+            .step_by(stride)
+            .filter_map(|s| {
+                let target = self.map.belief(canonical(*s))?;
+                let (paths, _) = self.paths(canonical(*s));
+                (paths.len() > 1).then_some((paths, target))
+            })
+            .collect();
+        if samples.is_empty() {
+            return 1.0;
+        }
+        let loss = |alpha: f64| -> f64 {
+            samples
+                .iter()
+                .map(|(paths, target)| {
+                    let w = (paths.len() as f64).powf(-alpha);
+                    let p = fuse_log_linear(paths, q, self.options.epsilon, w);
+                    target
+                        .iter()
+                        .zip(&p)
+                        .map(|(t, v)| -t * v.max(1e-300).ln())
+                        .sum::<f64>()
+                })
+                .sum::<f64>()
+        };
+        ALPHA_GRID
+            .into_iter()
+            .min_by(|a, b| loss(*a).total_cmp(&loss(*b)))
+            .unwrap_or(1.0)
+    }
+}
+
+fn fuse_mixture(paths: &[Vec<f64>], q: usize, eps: f64) -> Vec<f64> {
+    let uniform = 1.0 / q as f64;
+    if paths.is_empty() {
+        return vec![uniform; q];
+    }
+    let k = paths.len() as f64;
+    (0..q)
+        .map(|t| {
+            paths
+                .iter()
+                .map(|p| (1.0 - eps) * p[t] + eps * uniform)
+                .sum::<f64>()
+                / k
+        })
+        .collect()
+}
+
+/// `p ∝ Π_i p_i^weight`, each path smoothed with ε first; uniform without paths or when
+/// nothing survives.
+fn fuse_log_linear(paths: &[Vec<f64>], q: usize, eps: f64, weight: f64) -> Vec<f64> {
+    let uniform = 1.0 / q as f64;
+    if paths.is_empty() {
+        return vec![uniform; q];
+    }
+    let logs: Vec<f64> = (0..q)
+        .map(|t| {
+            paths
+                .iter()
+                .map(|p| ((1.0 - eps) * p[t] + eps * uniform).ln())
+                .sum::<f64>()
+                * weight
+        })
+        .collect();
+    let max = logs.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    let mut out: Vec<f64> = logs.iter().map(|l| (l - max).exp()).collect();
+    let total: f64 = out.iter().sum();
+    if !(total > 0.0 && total.is_finite()) {
+        // ε = 0 with paths that exclude each other: nothing is left; say "unknown".
+        return vec![uniform; q];
+    }
+    out.iter_mut().for_each(|v| *v /= total);
+    out
+}
+
+/// Predicts `{a,b:d}` from the map's observed beliefs with the default options.
+///
+/// # Errors
+/// As [`Inferrer::new`] and [`Inferrer::infer`].
+pub fn infer(map: &Pqrm, set: LandmarkSet) -> Result<Inference> {
+    Inferrer::new(map, InferOptions::default())?.infer(set)
+}

@@ -1,0 +1,782 @@
+//! The evaluation of reasoning over maps (issue 13 §2, `qrm reason study`):
+//! (a) *hidden sets* on a recording with surveyed truth — hide a fraction of the observed
+//!     sets, infer them from the rest, score against the truth beside random, the marginal
+//!     prior and the map's own (unhidden) belief;
+//! (b) *never seen together* in the Monte Carlo world with a short sensor range — coverage and
+//!     error of inference on every triplet the robot never saw at once;
+//! (c) *consistency check* of the full map — how many most likely entries closure flags and
+//!     how many of those are truly wrong (precision) and how many wrong entries it finds
+//!     (recall).
+
+use std::collections::BTreeMap;
+
+use qsr_core::{Calculus, StateId};
+use rand::{RngExt, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use serde::{Deserialize, Serialize};
+
+use crate::error::{PqrmError, Result};
+use crate::likelihood::LandmarkSet;
+use crate::loaders::Dataset;
+use crate::map::{Pqrm, PqrmConfig};
+use crate::metrics::GroundTruth;
+use crate::reason::network::orderings;
+use crate::reason::{Fusion, InferOptions, Inferrer, check, observed_sets};
+use crate::study::{MonteCarloConfig, simulate_trial};
+
+/// Settings of the study.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ReasonStudyConfig {
+    /// Calculi to evaluate.
+    pub calculi: Vec<String>,
+    /// Fraction of the observed sets hidden in (a).
+    pub hide_fraction: f64,
+    /// Independent hidings in (a).
+    pub repeats: usize,
+    /// Weight of uniform mixed into each path.
+    pub epsilon: f64,
+    /// Rounds of chained inference in (b).
+    pub rounds: usize,
+    /// The mapper's settings.
+    pub map: PqrmConfig,
+    /// The world of (b): the Monte Carlo world with a short range (`landmarks`, `range`,
+    /// `step_deg`, `radius`, `world` are used; σ is `sigma_b`).
+    pub world: MonteCarloConfig,
+    /// Sensor noise of (b) (m).
+    pub sigma_b: f64,
+    /// Worlds in (b).
+    pub worlds_b: usize,
+    /// Seed.
+    pub seed: u64,
+}
+
+impl Default for ReasonStudyConfig {
+    fn default() -> Self {
+        Self {
+            calculi: ["edc", "double-cross", "quadrant", "left-right"]
+                .map(str::to_owned)
+                .to_vec(),
+            hide_fraction: 0.2,
+            repeats: 5,
+            epsilon: InferOptions::default().epsilon,
+            rounds: InferOptions::default().rounds,
+            map: PqrmConfig {
+                samples: 500,
+                ..PqrmConfig::default()
+            },
+            world: MonteCarloConfig {
+                landmarks: 30,
+                range: 25.0,
+                step_deg: 3.0,
+                ..MonteCarloConfig::default()
+            },
+            sigma_b: 1.0,
+            worlds_b: 5,
+            seed: 0,
+        }
+    }
+}
+
+impl ReasonStudyConfig {
+    /// A small version for tests and `--quick`.
+    #[must_use]
+    pub fn quick() -> Self {
+        let d = Self::default();
+        Self {
+            calculi: ["edc", "double-cross"].map(str::to_owned).to_vec(),
+            repeats: 2,
+            map: PqrmConfig {
+                samples: 150,
+                ..d.map
+            },
+            world: MonteCarloConfig {
+                landmarks: 16,
+                ..d.world.clone()
+            },
+            worlds_b: 2,
+            ..d
+        }
+    }
+
+    /// Checks the settings.
+    ///
+    /// # Errors
+    /// [`PqrmError::InvalidConfig`] naming the setting.
+    pub fn validate(&self) -> Result<()> {
+        let bad = |m: String| Err(PqrmError::InvalidConfig(m));
+        if !(self.hide_fraction > 0.0 && self.hide_fraction < 1.0) {
+            return bad(format!(
+                "hide_fraction must be in (0, 1), got {}",
+                self.hide_fraction
+            ));
+        }
+        if self.repeats == 0 || self.repeats > 1000 {
+            return bad(format!("repeats must be in 1..=1000, got {}", self.repeats));
+        }
+        InferOptions {
+            epsilon: self.epsilon,
+            rounds: self.rounds,
+            ..InferOptions::default()
+        }
+        .validate()?;
+        if !(self.sigma_b.is_finite() && self.sigma_b >= 0.0) {
+            return bad(format!(
+                "sigma_b must be finite and >= 0, got {}",
+                self.sigma_b
+            ));
+        }
+        if self.worlds_b > 1000 || self.world.landmarks > 200 {
+            return bad("worlds_b ≤ 1000 and world.landmarks ≤ 200".into());
+        }
+        if self.calculi.is_empty() {
+            return bad("no calculi".into());
+        }
+        self.map.validate()
+    }
+}
+
+/// Reliability-diagram bin: predictions whose P(ML) fell in `[lo, hi)`.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+pub struct CalibrationBin {
+    /// Lower edge.
+    pub lo: f64,
+    /// Upper edge.
+    pub hi: f64,
+    /// Predictions in the bin.
+    pub count: usize,
+    /// Their mean P(ML).
+    pub mean_p: f64,
+    /// The fraction whose ML state was right.
+    pub accuracy: f64,
+}
+
+/// Scores of one predictor over a set of ordered triplets with known truth.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+pub struct Score {
+    /// Ordered triplets scored.
+    pub n: usize,
+    /// Fraction whose most likely state is wrong.
+    pub error_rate: f64,
+    /// Fraction whose true state is not among the two most likely.
+    pub top2_error: f64,
+    /// Mean neighbour distance between the most likely and the true state.
+    pub mean_neighbor_distance: f64,
+    /// Mean −ln p(true state).
+    pub log_loss: f64,
+    /// Fraction of predictions more informative than uniform (entropy < ln Q − 0.05).
+    pub coverage: f64,
+    /// Expected calibration error: Σ_bins (count/n)·|accuracy − mean P(ML)|.
+    pub calibration_error: f64,
+    /// Ten equal-width bins of P(ML).
+    pub bins: Vec<CalibrationBin>,
+}
+
+#[derive(Default, Clone)]
+struct Accumulator {
+    n: usize,
+    wrong: usize,
+    top2: usize,
+    dist: u64,
+    log_loss: f64,
+    covered: usize,
+    bins: [(usize, f64, usize); 10],
+}
+
+impl Accumulator {
+    fn add(&mut self, calc: &Calculus, p: &[f64], truth: StateId) {
+        let q = p.len();
+        let mut order: Vec<usize> = (0..q).collect();
+        order.sort_by(|a, b| p[*b].total_cmp(&p[*a]).then(a.cmp(b)));
+        let ml = StateId(order[0] as u16);
+        self.n += 1;
+        self.wrong += usize::from(ml != truth);
+        self.top2 += usize::from(!order[..2.min(q)].contains(&truth.index()));
+        self.dist += u64::from(calc.neighbours().distance(ml, truth).unwrap_or(0));
+        self.log_loss -= p[truth.index()].max(1e-12).ln();
+        let h: f64 = p.iter().filter(|v| **v > 0.0).map(|v| -v * v.ln()).sum();
+        self.covered += usize::from(h < (q as f64).ln() - 0.05);
+        let pm = p[ml.index()];
+        let bin = ((pm * 10.0) as usize).min(9);
+        self.bins[bin].0 += 1;
+        self.bins[bin].1 += pm;
+        self.bins[bin].2 += usize::from(ml == truth);
+    }
+
+    fn score(&self) -> Score {
+        let n = self.n.max(1) as f64;
+        let bins: Vec<CalibrationBin> = self
+            .bins
+            .iter()
+            .enumerate()
+            .map(|(i, (count, psum, right))| CalibrationBin {
+                lo: i as f64 / 10.0,
+                hi: (i + 1) as f64 / 10.0,
+                count: *count,
+                mean_p: if *count > 0 {
+                    psum / *count as f64
+                } else {
+                    0.0
+                },
+                accuracy: if *count > 0 {
+                    *right as f64 / *count as f64
+                } else {
+                    0.0
+                },
+            })
+            .collect();
+        Score {
+            n: self.n,
+            error_rate: self.wrong as f64 / n,
+            top2_error: self.top2 as f64 / n,
+            mean_neighbor_distance: self.dist as f64 / n,
+            log_loss: self.log_loss / n,
+            coverage: self.covered as f64 / n,
+            calibration_error: bins
+                .iter()
+                .map(|b| b.count as f64 / n * (b.accuracy - b.mean_p).abs())
+                .sum(),
+            bins,
+        }
+    }
+}
+
+/// Named predictors of one part of the study: inference with each fusion, and baselines.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+pub struct Predictors {
+    /// Inference, by fusion name.
+    pub inferred: BTreeMap<String, Score>,
+    /// Uniform over the states.
+    pub random: Score,
+    /// The frequency of most likely states over the visible map's entries.
+    pub prior: Score,
+    /// (a) only: the map's own belief of the hidden set before hiding (what observing gives).
+    pub observed: Option<Score>,
+}
+
+/// The consistency check of one full map against the truth.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+pub struct CheckScore {
+    /// Observed unordered sets.
+    pub sets: usize,
+    /// Sets whose canonical ML state is wrong.
+    pub wrong: usize,
+    /// Whether the ML states survived closure as they are.
+    pub consistent: bool,
+    /// Sets flagged.
+    pub flagged: usize,
+    /// Flagged sets that are truly wrong.
+    pub flagged_wrong: usize,
+    /// flagged_wrong / flagged (1 when nothing is flagged).
+    pub precision: f64,
+    /// flagged_wrong / wrong (1 when nothing is wrong).
+    pub recall: f64,
+    /// The error rate of random flags at the same count: wrong / sets.
+    pub base_rate: f64,
+}
+
+/// One landmark of the reference-pair picture: where it sits in the frame of the pair (from
+/// the surveyed truth) and how much probability the map gives its true state.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct PicturePoint {
+    /// The landmark `c` of `{a,b:c}`.
+    pub landmark: u32,
+    /// Normalised position (A at the origin, B at (0, 1)).
+    pub xy: [f64; 2],
+    /// Whether the set was observed (else hidden and inferred).
+    pub observed: bool,
+    /// Probability of the true state: the belief if observed, the inference if hidden.
+    pub p_true: f64,
+}
+
+/// Every landmark relative to one reference pair, observed beside inferred (first hiding).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ReferencePairPicture {
+    /// `(a, b)`.
+    pub pair: [u32; 2],
+    /// One point per other landmark with truth.
+    pub points: Vec<PicturePoint>,
+}
+
+/// One calculus's results.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+pub struct ReasonCalculusResult {
+    /// Calculus name.
+    pub calculus: String,
+    /// Number of states.
+    pub states: usize,
+    /// (a) hidden sets on the recording.
+    pub hidden: Predictors,
+    /// (b) triplets never seen together in the simulated world.
+    pub unseen: Predictors,
+    /// (b) restricted to the triplets chained inference reached (round ≥ 1).
+    pub unseen_reached: Predictors,
+    /// (b): unordered sets never seen together, over all worlds.
+    pub unseen_sets: usize,
+    /// (b): of those, how many each round of chained inference reached (index 0: none).
+    pub unseen_rounds: Vec<usize>,
+    /// (c) the consistency check.
+    pub check: CheckScore,
+    /// The reference pair with the most hidden sets, observed vs inferred (first hiding).
+    pub picture: Option<ReferencePairPicture>,
+}
+
+fn new_accs() -> Accumulators {
+    (
+        Fusion::ALL
+            .iter()
+            .map(|f| (f.name().to_owned(), Accumulator::default()))
+            .collect(),
+        Accumulator::default(),
+        Accumulator::default(),
+        Accumulator::default(),
+    )
+}
+
+fn predictors(
+    fusions: &BTreeMap<String, Accumulator>,
+    random: &Accumulator,
+    prior: &Accumulator,
+    observed: Option<&Accumulator>,
+) -> Predictors {
+    Predictors {
+        inferred: fusions
+            .iter()
+            .map(|(k, a)| (k.clone(), a.score()))
+            .collect(),
+        random: random.score(),
+        prior: prior.score(),
+        observed: observed.map(Accumulator::score),
+    }
+}
+
+/// The distribution of most likely states over every recorded ordering of a map.
+fn ml_prior(map: &Pqrm) -> Vec<f64> {
+    let q = map.calculus().n_states();
+    let mut counts = vec![1.0; q]; // Laplace: no state gets probability 0
+    for set in observed_sets(map) {
+        for o in orderings(set) {
+            if let Some(p) = map.belief(o) {
+                let ml = (0..q).fold(0, |b, i| if p[i] > p[b] { i } else { b });
+                counts[ml] += 1.0;
+            }
+        }
+    }
+    let total: f64 = counts.iter().sum();
+    counts.iter().map(|c| c / total).collect()
+}
+
+fn build_map(
+    calc: &Calculus,
+    scans: &[crate::observation::Scan],
+    config: PqrmConfig,
+) -> Result<Pqrm> {
+    let mut map = Pqrm::new(calc.clone(), config)?;
+    for scan in scans {
+        if scan.observations.len() >= 3 {
+            map.update(scan)?;
+        }
+    }
+    Ok(map)
+}
+
+type Accumulators = (
+    BTreeMap<String, Accumulator>,
+    Accumulator,
+    Accumulator,
+    Accumulator,
+);
+
+/// Scores every fusion and the baselines on `targets` (ordered sets with truth), each
+/// inferred in one round from the visible map's observed beliefs.
+fn score_hidden(
+    visible: &Pqrm,
+    full: &Pqrm,
+    truth: &GroundTruth,
+    targets: &[LandmarkSet],
+    epsilon: f64,
+    accs: &mut Accumulators,
+) -> Result<()> {
+    let calc = visible.calculus();
+    let q = calc.n_states();
+    let inferrer = Inferrer::new(
+        visible,
+        InferOptions {
+            fusion: Fusion::Fitted,
+            epsilon,
+            rounds: 1,
+        },
+    )?;
+    let prior = ml_prior(visible);
+    let uniform = vec![1.0 / q as f64; q];
+    for set in targets {
+        let Some(t) = truth.state(calc, set)? else {
+            continue;
+        };
+        let (ps, _) = inferrer.paths(*set);
+        for f in Fusion::ALL {
+            let p = inferrer.fuse(&ps, f);
+            if let Some(acc) = accs.0.get_mut(f.name()) {
+                acc.add(calc, &p, t);
+            }
+        }
+        accs.1.add(calc, &uniform, t);
+        accs.2.add(calc, &prior, t);
+        if let Some(p) = full.belief(*set) {
+            accs.3.add(calc, &p, t);
+        }
+    }
+    Ok(())
+}
+
+/// Scores chained inference of every never-observed set of `map` (each fusion its own
+/// rounds) and the baselines; returns how many sets each round inferred (fitted fusion).
+fn score_unseen(
+    map: &Pqrm,
+    truth: &GroundTruth,
+    epsilon: f64,
+    rounds: usize,
+    accs: &mut Accumulators,
+    reached: &mut Accumulators,
+) -> Result<Vec<usize>> {
+    let calc = map.calculus();
+    let q = calc.n_states();
+    let prior = ml_prior(map);
+    let uniform = vec![1.0 / q as f64; q];
+    let mut per_round = vec![0; rounds + 1];
+    for f in Fusion::ALL {
+        let mut inferrer = Inferrer::new(
+            map,
+            InferOptions {
+                fusion: f,
+                epsilon,
+                rounds,
+            },
+        )?;
+        let inferences = inferrer.infer_unseen();
+        for inf in &inferences {
+            let set = LandmarkSet::new(inf.set[0], inf.set[1], inf.set[2]);
+            if f == Fusion::Fitted {
+                per_round[inf.round] += 1;
+            }
+            for o in orderings(set) {
+                let Some(t) = truth.state(calc, &o)? else {
+                    continue;
+                };
+                let p = inferrer
+                    .inferred(o)
+                    .map_or_else(|| uniform.clone(), <[f64]>::to_vec);
+                if let Some(acc) = accs.0.get_mut(f.name()) {
+                    acc.add(calc, &p, t);
+                }
+                if inf.round > 0
+                    && let Some(acc) = reached.0.get_mut(f.name())
+                {
+                    acc.add(calc, &p, t);
+                }
+                if f == Fusion::Fitted {
+                    accs.1.add(calc, &uniform, t);
+                    accs.2.add(calc, &prior, t);
+                    if inf.round > 0 {
+                        reached.1.add(calc, &uniform, t);
+                        reached.2.add(calc, &prior, t);
+                    }
+                }
+            }
+        }
+    }
+    Ok(per_round)
+}
+
+/// Runs (a) and (c) on `dataset` (which needs surveyed truth) and (b) in simulation.
+/// `progress` is called once per unit of work (see [`ReasonStudyConfig::work_units`]).
+///
+/// # Errors
+/// [`PqrmError::Mismatch`] without ground truth; invalid settings; mapper errors.
+pub fn run_reason_study(
+    dataset: &Dataset,
+    config: &ReasonStudyConfig,
+    progress: &(dyn Fn() + Sync),
+) -> Result<Vec<ReasonCalculusResult>> {
+    config.validate()?;
+    let truth = dataset
+        .truth
+        .as_ref()
+        .ok_or_else(|| PqrmError::Mismatch("the reasoning study needs surveyed truth".into()))?;
+    let mut out = Vec::new();
+    for name in &config.calculi {
+        let calc = Calculus::resolve(name)?;
+        // (a) and (c): the full map of the recording.
+        let full = build_map(&calc, &dataset.scans, config.map)?;
+        progress();
+        let sets: Vec<LandmarkSet> = observed_sets(&full)
+            .into_iter()
+            .filter(|s| truth.state(&calc, s).ok().flatten().is_some())
+            .collect();
+        let mut accs = new_accs();
+        let mut picture = None;
+        for repeat in 0..config.repeats {
+            let mut rng = ChaCha8Rng::seed_from_u64(
+                config.seed ^ (repeat as u64).wrapping_mul(0x9e37_79b9_7f4a_7c15),
+            );
+            let hidden: Vec<LandmarkSet> = sets
+                .iter()
+                .copied()
+                .filter(|_| rng.random::<f64>() < config.hide_fraction)
+                .collect();
+            let mut visible = full.clone();
+            let hidden_set: std::collections::BTreeSet<[u32; 3]> =
+                hidden.iter().map(LandmarkSet::ids).collect();
+            visible.retain(|s| {
+                let mut ids = s.ids();
+                ids.sort_unstable();
+                !hidden_set.contains(&ids)
+            });
+            let targets: Vec<LandmarkSet> = hidden.iter().flat_map(|s| orderings(*s)).collect();
+            score_hidden(&visible, &full, truth, &targets, config.epsilon, &mut accs)?;
+            if repeat == 0 {
+                picture = reference_pair_picture(&visible, truth, &hidden, config.epsilon)?;
+            }
+            progress();
+        }
+        let hidden = predictors(&accs.0, &accs.1, &accs.2, Some(&accs.3));
+        // (c)
+        let checked = check(&full)?;
+        let wrong_sets: std::collections::BTreeSet<[u32; 3]> = sets
+            .iter()
+            .filter(|s| {
+                let p = full.belief(**s).unwrap_or_default();
+                let ml = (0..p.len()).fold(0, |b, i| if p[i] > p[b] { i } else { b });
+                truth.state(&calc, s).ok().flatten() != Some(StateId(ml as u16))
+            })
+            .map(LandmarkSet::ids)
+            .collect();
+        let flagged_wrong = checked
+            .flagged
+            .iter()
+            .filter(|f| wrong_sets.contains(&f.set))
+            .count();
+        let check_score = CheckScore {
+            sets: sets.len(),
+            wrong: wrong_sets.len(),
+            consistent: checked.consistent,
+            flagged: checked.flagged.len(),
+            flagged_wrong,
+            precision: if checked.flagged.is_empty() {
+                1.0
+            } else {
+                flagged_wrong as f64 / checked.flagged.len() as f64
+            },
+            recall: if wrong_sets.is_empty() {
+                1.0
+            } else {
+                flagged_wrong as f64 / wrong_sets.len() as f64
+            },
+            base_rate: wrong_sets.len() as f64 / sets.len().max(1) as f64,
+        };
+        progress();
+        // (b)
+        let mut accs_b = new_accs();
+        let mut reached_b = new_accs();
+        let mut unseen_sets = 0;
+        let mut unseen_rounds = vec![0; config.rounds + 1];
+        for w in 0..config.worlds_b {
+            let world = MonteCarloConfig {
+                seed: config.seed ^ 0x5eed_0b0b,
+                ..config.world.clone()
+            };
+            let (wtruth, scans) = simulate_trial(&world, config.sigma_b, 0, w);
+            let map = build_map(
+                &calc,
+                &scans,
+                PqrmConfig {
+                    seed: config.map.seed ^ w as u64,
+                    ..config.map
+                },
+            )?;
+            let per_round = score_unseen(
+                &map,
+                &wtruth,
+                config.epsilon,
+                config.rounds,
+                &mut accs_b,
+                &mut reached_b,
+            )?;
+            unseen_sets += per_round.iter().sum::<usize>();
+            for (total, n) in unseen_rounds.iter_mut().zip(per_round) {
+                *total += n;
+            }
+            progress();
+        }
+        out.push(ReasonCalculusResult {
+            calculus: calc.name().to_owned(),
+            states: calc.n_states(),
+            hidden,
+            unseen: predictors(&accs_b.0, &accs_b.1, &accs_b.2, None),
+            unseen_reached: predictors(&reached_b.0, &reached_b.1, &reached_b.2, None),
+            unseen_sets,
+            unseen_rounds,
+            check: check_score,
+            picture,
+        });
+    }
+    Ok(out)
+}
+
+/// The ordered pair with the most hidden sets, every other landmark placed in its frame.
+fn reference_pair_picture(
+    visible: &Pqrm,
+    truth: &GroundTruth,
+    hidden: &[LandmarkSet],
+    epsilon: f64,
+) -> Result<Option<ReferencePairPicture>> {
+    let mut count: BTreeMap<[u32; 2], usize> = BTreeMap::new();
+    for s in hidden {
+        let [a, b, c] = s.ids();
+        for pair in [[a, b], [a, c], [b, c]] {
+            *count.entry(pair).or_default() += 1;
+        }
+    }
+    let Some((&[a, b], _)) = count.iter().max_by(|x, y| x.1.cmp(y.1).then(y.0.cmp(x.0))) else {
+        return Ok(None);
+    };
+    let calc = visible.calculus();
+    let inferrer = Inferrer::new(
+        visible,
+        InferOptions {
+            epsilon,
+            rounds: 1,
+            ..InferOptions::default()
+        },
+    )?;
+    let mut points = Vec::new();
+    for c in truth.positions.keys().map(|l| l.0) {
+        if c == a || c == b {
+            continue;
+        }
+        let set = LandmarkSet::new(a, b, c);
+        let (Some(t), Some((xy, _))) = (truth.state(calc, &set)?, truth.normalised(&set)) else {
+            continue;
+        };
+        let mut ids = [a, b, c];
+        ids.sort_unstable();
+        let is_hidden = hidden.iter().any(|h| h.ids() == ids);
+        let (observed, p) = match visible.belief(set) {
+            Some(p) if !is_hidden => (true, p),
+            _ if is_hidden => (false, inferrer.infer(set)?.p),
+            _ => continue, // never observed at all: not part of the hiding experiment
+        };
+        points.push(PicturePoint {
+            landmark: c,
+            xy,
+            observed,
+            p_true: p[t.index()],
+        });
+    }
+    Ok(Some(ReferencePairPicture {
+        pair: [a, b],
+        points,
+    }))
+}
+
+impl ReasonStudyConfig {
+    /// Units of work [`run_reason_study`] reports through `progress`.
+    #[must_use]
+    pub fn work_units(&self) -> u64 {
+        (self.calculi.len() * (2 + self.repeats + self.worlds_b)) as u64
+    }
+}
+
+/// One statement of the report, judged from the measurements.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Claim {
+    /// What is claimed.
+    pub what: String,
+    /// The measurement it rests on.
+    pub ours: String,
+    /// Whether the measurement supports it.
+    pub holds: bool,
+}
+
+/// The claims the study tests for one calculus, with `fusion` as the inference reported.
+#[must_use]
+pub fn claims(r: &ReasonCalculusResult, fusion: Fusion) -> Vec<Claim> {
+    let mut out = Vec::new();
+    let f = fusion.name();
+    if let Some(inf) = r.hidden.inferred.get(f) {
+        out.push(Claim {
+            what: format!(
+                "{}: inferred hidden sets beat the marginal prior",
+                r.calculus
+            ),
+            ours: format!(
+                "error {:.3} vs {:.3}, log loss {:.3} vs {:.3}",
+                inf.error_rate, r.hidden.prior.error_rate, inf.log_loss, r.hidden.prior.log_loss
+            ),
+            holds: inf.n > 0
+                && inf.error_rate < r.hidden.prior.error_rate
+                && inf.log_loss < r.hidden.prior.log_loss,
+        });
+        out.push(Claim {
+            what: format!(
+                "{}: inference of hidden sets is calibrated (ECE ≤ 0.05)",
+                r.calculus
+            ),
+            ours: format!(
+                "ECE {:.3} over {} predictions",
+                inf.calibration_error, inf.n
+            ),
+            holds: inf.n > 0 && inf.calibration_error <= 0.05,
+        });
+    }
+    if let Some(inf) = r.unseen_reached.inferred.get(f) {
+        let reached: usize = r.unseen_rounds.iter().skip(1).sum();
+        out.push(Claim {
+            what: format!(
+                "{}: triplets never seen together that chained composition reaches are \
+                 predicted better than by the prior",
+                r.calculus
+            ),
+            ours: format!(
+                "{reached} of {} sets reached; on them error {:.3} vs prior {:.3}, log loss \
+                 {:.3} vs {:.3}",
+                r.unseen_sets,
+                inf.error_rate,
+                r.unseen_reached.prior.error_rate,
+                inf.log_loss,
+                r.unseen_reached.prior.log_loss
+            ),
+            holds: inf.n > 0
+                && inf.error_rate < r.unseen_reached.prior.error_rate
+                && inf.log_loss < r.unseen_reached.prior.log_loss,
+        });
+    }
+    let c = &r.check;
+    out.push(Claim {
+        what: format!(
+            "{}: the check's flags are wrong more often than a random entry",
+            r.calculus
+        ),
+        ours: format!(
+            "precision {:.3} ({} of {} flags) vs base rate {:.3}",
+            c.precision, c.flagged_wrong, c.flagged, c.base_rate
+        ),
+        holds: c.flagged > 0 && c.precision > c.base_rate,
+    });
+    out
+}
+
+/// The fusion with the lowest mean log loss on the hidden sets over all calculi (the
+/// measurement behind [`Fusion::default`]).
+#[must_use]
+pub fn best_fusion(results: &[ReasonCalculusResult]) -> Option<Fusion> {
+    Fusion::ALL.into_iter().min_by(|a, b| {
+        let loss = |f: Fusion| {
+            let v: Vec<f64> = results
+                .iter()
+                .filter_map(|r| r.hidden.inferred.get(f.name()).map(|s| s.log_loss))
+                .collect();
+            v.iter().sum::<f64>() / v.len().max(1) as f64
+        };
+        loss(*a).total_cmp(&loss(*b))
+    })
+}

@@ -1,0 +1,88 @@
+"""Qualitative reasoning over constraint networks: algebraic closure and scenarios.
+
+A network is a list of constraints ``(A, B, C, [labels])``: the relation ``{A,B:C}`` is one of
+the labels. Points are names (strings); labels are the calculus's.
+
+>>> import qrm
+>>> dc = qrm.Calculus.builtin("double-cross")
+>>> r = qrm.reason.close(dc, [("A", "B", "C", ["left-front"]), ("B", "C", "D", ["left-front"])])
+>>> r.consistent, r.constraints[("A", "B", "D")]
+(True, ['left-front', 'left-middle', 'left-back'])
+
+Probabilistic reasoning over maps lives on the map: ``Pqrm.infer`` and ``Pqrm.check``.
+"""
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass
+from typing import Dict, Iterable, List, Optional, Sequence, Tuple
+
+from . import _qrm
+from ._qrm import Calculus
+
+__all__ = ["Closure", "Triplet", "close", "scenario"]
+
+Triplet = Tuple[str, str, str]
+
+
+@dataclass(frozen=True)
+class Closure:
+    """The result of `close` or `scenario`."""
+
+    consistent: bool
+    """False when closure emptied a constraint (or, for `scenario`, when none exists)."""
+    constraints: Dict[Triplet, List[str]]
+    """Every ordered triplet of distinct points with its labels (empty dict for a scenario
+    search that found none)."""
+    explanation: Optional[str] = None
+    """Why closure found the network inconsistent (the chain of refinements)."""
+
+
+def _network(constraints: Iterable[Tuple[str, str, str, Sequence[str]]]) -> str:
+    rows = []
+    for c in constraints:
+        a, b, d, labels = c
+        rows.append([str(a), str(b), str(d), [str(x) for x in labels]])
+    return json.dumps({"constraints": rows})
+
+
+def _triplets(rows: Optional[List[List[object]]]) -> Dict[Triplet, List[str]]:
+    out: Dict[Triplet, List[str]] = {}
+    for a, b, c, labels in rows or []:
+        assert isinstance(labels, list)
+        out[(str(a), str(b), str(c))] = [str(x) for x in labels]
+    return out
+
+
+def close(
+    calculus: Calculus,
+    constraints: Iterable[Tuple[str, str, str, Sequence[str]]],
+    *,
+    general_position: bool = False,
+) -> Closure:
+    """Algebraic closure (SparQ semantics) with the calculus's sound tables, or the tables of
+    configurations in general position with ``general_position=True``."""
+    out = json.loads(
+        _qrm.reason_close(calculus, _network(constraints), general_position=general_position)
+    )
+    return Closure(out["consistent"], _triplets(out["constraints"]), out["explanation"])
+
+
+def scenario(
+    calculus: Calculus,
+    constraints: Iterable[Tuple[str, str, str, Sequence[str]]],
+    *,
+    general_position: bool = False,
+    max_nodes: int = 100_000,
+) -> Closure:
+    """One algebraically closed scenario refining the network (every triplet one label), or
+    ``consistent=False`` when there is none."""
+    out = json.loads(
+        _qrm.reason_scenario(
+            calculus,
+            _network(constraints),
+            general_position=general_position,
+            max_nodes=max_nodes,
+        )
+    )
+    return Closure(out["consistent"], _triplets(out["constraints"]))

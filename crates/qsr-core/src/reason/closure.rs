@@ -1,0 +1,530 @@
+//! Algebraic closure ([`close`]): refine every constraint of a [`Network`] with the
+//! permutation operations and with composition until nothing changes.
+//!
+//! The rules, for distinct points `a, b, c, d`:
+//! - permutation: `{π(a,b,c)} ⊆ op({a,b:c})` for each of the five operations;
+//! - composition: `{a,b:d} ⊆ {a,b:c} ∘ {b,c:d}` (SparQ's ternary composition).
+//!
+//! Work is organised by unordered triplet. When any ordering of `{x, y, z}` changes, the
+//! triplet is queued; processing it first makes its six orderings agree through the
+//! permutation tables, then re-runs every composition rule in which one of its orderings is an
+//! input: with `(p, q, r)` an ordering and `w` any fourth point, `{p,q:w} ⊆ {p,q:r} ∘ {q,r:w}`
+//! and `{w,p:r} ⊆ {w,p:q} ∘ {p,q:r}`. Each rule is run again only when one of its inputs
+//! changed (AC-3 style), so the fixpoint is reached with each refinement done once.
+//!
+//! Queued triplets are processed in rounds: the compositions of one round are evaluated in
+//! parallel against the network as it stands, then applied in triplet order. The closed
+//! network (the greatest fixpoint of the rules) is unique, and the order of application is
+//! fixed, so the result, the point of a contradiction and its explanation do not depend on the
+//! thread count.
+//!
+//! Algebraic closure is sound: a configuration of distinct points satisfying the input
+//! satisfies the closed network, *provided the tables are complete* (see
+//! [`TableScope`](crate::reason::TableScope)). It is not complete: for ternary point calculi a
+//! closed network need not be realisable (deciding that is NP-hard), so "consistent" here means
+//! "not refuted by closure", as in SparQ and GQR.
+
+use rayon::prelude::*;
+
+use crate::error::QsrError;
+use crate::permute::{Permutation, all_orderings};
+use crate::reason::algebra::Algebra;
+use crate::reason::network::Network;
+use crate::reason::state_set::{StateSet, count};
+
+/// Options of [`close_with`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct ClosureOptions {
+    /// Keep, for every constraint, the rule that last refined it, so a contradiction comes with
+    /// the chain of refinements that produced it (12 bytes per ordered triplet).
+    pub explain: bool,
+    /// The most steps an explanation lists.
+    pub max_explanation_steps: usize,
+}
+
+impl Default for ClosureOptions {
+    fn default() -> Self {
+        Self {
+            explain: true,
+            max_explanation_steps: 24,
+        }
+    }
+}
+
+impl ClosureOptions {
+    /// No provenance kept (faster, less memory); a contradiction still names the constraint
+    /// that became empty and the rule that emptied it.
+    #[must_use]
+    pub fn without_explanation() -> Self {
+        Self {
+            explain: false,
+            ..Self::default()
+        }
+    }
+}
+
+/// Why a constraint holds the set it holds.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Rule {
+    /// As given (never refined).
+    Given,
+    /// Refined by a permutation of another ordering of the same points.
+    Permutation {
+        /// The operation.
+        op: Permutation,
+        /// The ordering it was applied to, `(a, b, c)` for `{a,b:c}`.
+        from: [usize; 3],
+    },
+    /// Refined by composing two constraints: `{a,b:d} ⊆ {a,b:c} ∘ {b,c:d}`.
+    Composition {
+        /// `{a,b:c}`.
+        left: [usize; 3],
+        /// `{b,c:d}`.
+        right: [usize; 3],
+    },
+    /// Not recorded ([`ClosureOptions::explain`] was off).
+    Unrecorded,
+}
+
+/// One line of an explanation: a constraint, its set, and the rule behind it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Step {
+    /// `(a, b, c)` for `{a,b:c}`.
+    pub triplet: [usize; 3],
+    /// Its set when the contradiction arose.
+    pub states: StateSet,
+    /// The rule that last refined it.
+    pub rule: Rule,
+}
+
+/// A constraint that became empty, and why.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Contradiction {
+    /// The constraint that became empty.
+    pub triplet: [usize; 3],
+    /// Its set just before.
+    pub before: StateSet,
+    /// The set the emptying rule allows (disjoint from `before`).
+    pub allowed: StateSet,
+    /// The emptying rule.
+    pub rule: Rule,
+    /// The constraints the rule used and, recursively, theirs, down to given ones.
+    pub steps: Vec<Step>,
+    /// Whether `steps` was cut at [`ClosureOptions::max_explanation_steps`].
+    pub truncated: bool,
+}
+
+impl Contradiction {
+    /// A text a user can read, with point names and labels.
+    #[must_use]
+    pub fn describe(&self, network: &Network) -> String {
+        let c = network.calculus();
+        let name = |t: &[usize; 3]| {
+            let n = network.names();
+            format!("{{{},{}:{}}}", n[t[0]], n[t[1]], n[t[2]])
+        };
+        let set = |s: &StateSet| format!("{{{}}}", s.labels(c).join(", "));
+        let rule = |r: &Rule| match r {
+            Rule::Given => "given".to_owned(),
+            Rule::Permutation { op, from } => format!("{op} of {}", name(from)),
+            Rule::Composition { left, right } => format!("{} ∘ {}", name(left), name(right)),
+            Rule::Unrecorded => "refined (provenance not kept)".to_owned(),
+        };
+        let mut out = format!(
+            "{} became empty: it was {} and {} allows only {}",
+            name(&self.triplet),
+            set(&self.before),
+            rule(&self.rule),
+            set(&self.allowed)
+        );
+        if !self.steps.is_empty() {
+            out.push_str("\nbecause:");
+            for s in &self.steps {
+                out.push_str(&format!(
+                    "\n  {} = {}  ({})",
+                    name(&s.triplet),
+                    set(&s.states),
+                    rule(&s.rule)
+                ));
+            }
+            if self.truncated {
+                out.push_str("\n  …");
+            }
+        }
+        out
+    }
+}
+
+/// Counters of one closure.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct ClosureStats {
+    /// Rounds of the queue.
+    pub rounds: usize,
+    /// Unordered triplets processed (a triplet counts once per round it was queued in).
+    pub triplets_processed: usize,
+    /// Constraints that were strictly refined.
+    pub refinements: usize,
+}
+
+/// The result of [`close`]: the network at the fixpoint, or at the moment a constraint
+/// became empty.
+#[derive(Debug, Clone)]
+pub struct Closure {
+    /// The closed network (or the network when the contradiction arose).
+    pub network: Network,
+    /// `None` when closure found no contradiction.
+    pub contradiction: Option<Contradiction>,
+    /// Work done.
+    pub stats: ClosureStats,
+}
+
+impl Closure {
+    /// Whether closure found no contradiction ("algebraically closed").
+    #[must_use]
+    pub fn is_consistent(&self) -> bool {
+        self.contradiction.is_none()
+    }
+}
+
+/// Algebraic closure with the default options (explanations kept).
+///
+/// ```
+/// use qsr_core::{Calculus, reason::{Algebra, Network, TableScope, close}};
+/// let lr = Calculus::builtin("left-right")?;
+/// let alg = Algebra::of(&lr, TableScope::Sound)?;
+/// let mut net = Network::universal(&lr, ["A", "B", "C"])?;
+/// net.constrain_labels("A", "B", "C", &["left"])?;
+/// net.constrain_labels("B", "A", "C", &["left"])?; // the inverse says: right
+/// let closed = close(net, &alg)?;
+/// assert!(!closed.is_consistent());
+/// # Ok::<(), qsr_core::QsrError>(())
+/// ```
+///
+/// # Errors
+/// [`QsrError::Arity`] when the algebra belongs to another calculus than the network.
+pub fn close(network: Network, algebra: &Algebra) -> crate::Result<Closure> {
+    close_with(network, algebra, &ClosureOptions::default())
+}
+
+/// Algebraic closure with explicit options.
+///
+/// # Errors
+/// As [`close`].
+pub fn close_with(
+    network: Network,
+    algebra: &Algebra,
+    options: &ClosureOptions,
+) -> crate::Result<Closure> {
+    let n = network.n_points();
+    let all = (0..n)
+        .flat_map(|a| (a + 1..n).flat_map(move |b| (b + 1..n).map(move |c| [a, b, c])))
+        .map(|t| network.index(t[0], t[1], t[2]))
+        .collect();
+    close_from(network, algebra, all, options)
+}
+
+/// Closure of a network that was closed before `frontier` (canonical indices of unordered
+/// triplets) changed: only their consequences are propagated.
+pub(crate) fn close_from(
+    mut network: Network,
+    algebra: &Algebra,
+    frontier: Vec<usize>,
+    options: &ClosureOptions,
+) -> crate::Result<Closure> {
+    if algebra.n_states() != network.calculus().n_states()
+        || algebra.calculus().name() != network.calculus().name()
+    {
+        return Err(QsrError::Arity(format!(
+            "the tables are of calculus `{}` ({} states), the network of `{}` ({} states)",
+            algebra.calculus().name(),
+            algebra.n_states(),
+            network.calculus().name(),
+            network.calculus().n_states()
+        )));
+    }
+    let mut state = Propagation {
+        reasons: options
+            .explain
+            .then(|| vec![Reason::Given; network.n_points().pow(3)]),
+        stats: ClosureStats::default(),
+    };
+    let outcome = state.run(&mut network, algebra, frontier);
+    let contradiction = outcome.err().map(|empty| {
+        let mut c = empty.into_contradiction(&network, algebra);
+        if let Some(reasons) = &state.reasons {
+            explain(&mut c, &network, reasons, options.max_explanation_steps);
+        }
+        c
+    });
+    Ok(Closure {
+        network,
+        contradiction,
+        stats: state.stats,
+    })
+}
+
+/// Compact provenance of one ordered triplet.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Reason {
+    Given,
+    Permutation(Permutation, u32),
+    Composition(u32, u32),
+}
+
+/// The moment a constraint became empty.
+struct Emptied {
+    target: usize,
+    before: Vec<u64>,
+    allowed: Vec<u64>,
+    reason: Reason,
+}
+
+impl Emptied {
+    fn into_contradiction(self, net: &Network, alg: &Algebra) -> Contradiction {
+        let n_states = alg.n_states();
+        Contradiction {
+            triplet: net.triplet(self.target),
+            before: StateSet::from_words(n_states, &self.before),
+            allowed: StateSet::from_words(n_states, &self.allowed),
+            rule: rule_of(net, self.reason),
+            steps: Vec::new(),
+            truncated: false,
+        }
+    }
+}
+
+fn rule_of(net: &Network, r: Reason) -> Rule {
+    match r {
+        Reason::Given => Rule::Given,
+        Reason::Permutation(op, from) => Rule::Permutation {
+            op,
+            from: net.triplet(from as usize),
+        },
+        Reason::Composition(l, r) => Rule::Composition {
+            left: net.triplet(l as usize),
+            right: net.triplet(r as usize),
+        },
+    }
+}
+
+/// Walks the provenance back from the emptying rule's inputs, breadth first.
+fn explain(c: &mut Contradiction, net: &Network, reasons: &[Reason], max_steps: usize) {
+    let index = |t: [usize; 3]| net.index(t[0], t[1], t[2]);
+    let inputs = |r: &Rule| match r {
+        Rule::Permutation { from, .. } => vec![index(*from)],
+        Rule::Composition { left, right } => vec![index(*left), index(*right)],
+        Rule::Given | Rule::Unrecorded => vec![],
+    };
+    let mut queue: std::collections::VecDeque<usize> = inputs(&c.rule).into();
+    let mut seen = std::collections::HashSet::new();
+    while let Some(i) = queue.pop_front() {
+        if !seen.insert(i) {
+            continue;
+        }
+        if c.steps.len() == max_steps {
+            c.truncated = true;
+            break;
+        }
+        let rule = rule_of(net, reasons[i]);
+        queue.extend(inputs(&rule));
+        let t = net.triplet(i);
+        c.steps.push(Step {
+            triplet: t,
+            states: net.get(t[0], t[1], t[2]),
+            rule,
+        });
+    }
+}
+
+/// A refinement proposed by one triplet's compositions: `target ∩= allowed`.
+struct Proposal {
+    target: u32,
+    left: u32,
+    right: u32,
+    allowed: Vec<u64>,
+}
+
+struct Propagation {
+    reasons: Option<Vec<Reason>>,
+    stats: ClosureStats,
+}
+
+impl Propagation {
+    fn run(
+        &mut self,
+        net: &mut Network,
+        alg: &Algebra,
+        mut frontier: Vec<usize>,
+    ) -> Result<(), Emptied> {
+        let n = net.n_points();
+        // Given empty sets are contradictions of their own.
+        for &t in &frontier {
+            for o in orderings(net, t) {
+                if count(net.words_at(o)) == 0 {
+                    return Err(Emptied {
+                        target: o,
+                        before: net.words_at(o).to_vec(),
+                        allowed: net.words_at(o).to_vec(),
+                        reason: Reason::Given,
+                    });
+                }
+            }
+        }
+        let mut queued = vec![false; n * n * n];
+        while !frontier.is_empty() {
+            frontier.sort_unstable();
+            frontier.dedup();
+            self.stats.rounds += 1;
+            self.stats.triplets_processed += frontier.len();
+            for &t in &frontier {
+                queued[t] = false;
+                self.sync_permutations(net, alg, t)?;
+            }
+            let snapshot: &Network = net;
+            let proposals: Vec<Vec<Proposal>> = frontier
+                .par_iter()
+                .map(|&t| compositions(snapshot, alg, t))
+                .collect();
+            let mut next = Vec::new();
+            for p in proposals.into_iter().flatten() {
+                let target = p.target as usize;
+                if self.refine(
+                    net,
+                    target,
+                    &p.allowed,
+                    Reason::Composition(p.left, p.right),
+                )? {
+                    let canon = canonical(net, target);
+                    if !queued[canon] {
+                        queued[canon] = true;
+                        next.push(canon);
+                    }
+                }
+            }
+            frontier = next;
+        }
+        Ok(())
+    }
+
+    /// `target ∩= allowed`; whether it changed. An empty result stops the closure.
+    fn refine(
+        &mut self,
+        net: &mut Network,
+        target: usize,
+        allowed: &[u64],
+        reason: Reason,
+    ) -> Result<bool, Emptied> {
+        let cur = net.words_at(target);
+        if cur.iter().zip(allowed).all(|(c, a)| c & !a == 0) {
+            return Ok(false);
+        }
+        let before = cur.to_vec();
+        let mut empty = true;
+        for (c, a) in net.words_at_mut(target).iter_mut().zip(allowed) {
+            *c &= a;
+            empty &= *c == 0;
+        }
+        self.stats.refinements += 1;
+        if let Some(r) = &mut self.reasons {
+            r[target] = reason;
+        }
+        if empty {
+            return Err(Emptied {
+                target,
+                before,
+                allowed: allowed.to_vec(),
+                reason,
+            });
+        }
+        Ok(true)
+    }
+
+    /// Makes the six orderings of one unordered triplet agree through the permutation tables.
+    fn sync_permutations(
+        &mut self,
+        net: &mut Network,
+        alg: &Algebra,
+        canon: usize,
+    ) -> Result<(), Emptied> {
+        let [a, b, c] = net.triplet(canon);
+        let mut permuted = vec![0u64; alg.words()];
+        loop {
+            let mut changed = false;
+            for (x, y, z) in [
+                (a, b, c),
+                (b, a, c),
+                (a, c, b),
+                (c, a, b),
+                (b, c, a),
+                (c, b, a),
+            ] {
+                let from = net.index(x, y, z);
+                for op in Permutation::ALL {
+                    let (p, q, r) = op.apply(x, y, z);
+                    let to = net.index(p, q, r);
+                    alg.permute_into(op, net.words_at(from), &mut permuted);
+                    changed |=
+                        self.refine(net, to, &permuted, Reason::Permutation(op, from as u32))?;
+                }
+            }
+            if !changed {
+                return Ok(());
+            }
+        }
+    }
+}
+
+/// The compositions in which one ordering of the triplet is an input.
+fn compositions(net: &Network, alg: &Algebra, canon: usize) -> Vec<Proposal> {
+    let n = net.n_points();
+    let [a, b, c] = net.triplet(canon);
+    let mut out = vec![0u64; alg.words()];
+    let mut proposals = Vec::new();
+    for (p, q, r) in [
+        (a, b, c),
+        (b, a, c),
+        (a, c, b),
+        (c, a, b),
+        (b, c, a),
+        (c, b, a),
+    ] {
+        let pqr = net.index(p, q, r);
+        let given = net.words_at(pqr);
+        for w in (0..n).filter(|&w| w != a && w != b && w != c) {
+            // {p,q:w} ⊆ {p,q:r} ∘ {q,r:w}
+            let (target, right) = (net.index(p, q, w), net.index(q, r, w));
+            if alg.compose_refines(given, net.words_at(right), net.words_at(target), &mut out) {
+                proposals.push(Proposal {
+                    target: target as u32,
+                    left: pqr as u32,
+                    right: right as u32,
+                    allowed: out.clone(),
+                });
+            }
+            // {w,p:r} ⊆ {w,p:q} ∘ {p,q:r}
+            let (target, left) = (net.index(w, p, r), net.index(w, p, q));
+            if alg.compose_refines(net.words_at(left), given, net.words_at(target), &mut out) {
+                proposals.push(Proposal {
+                    target: target as u32,
+                    left: left as u32,
+                    right: pqr as u32,
+                    allowed: out.clone(),
+                });
+            }
+        }
+    }
+    proposals
+}
+
+/// The flat indices of the six orderings of the triplet with canonical index `canon`.
+fn orderings(net: &Network, canon: usize) -> [usize; 6] {
+    let [a, b, c] = net.triplet(canon);
+    all_orderings(a, b, c).map(|(x, y, z)| net.index(x, y, z))
+}
+
+/// The canonical (sorted) index of the unordered triplet of an ordered one.
+pub(crate) fn canonical(net: &Network, index: usize) -> usize {
+    let mut t = net.triplet(index);
+    t.sort_unstable();
+    net.index(t[0], t[1], t[2])
+}
