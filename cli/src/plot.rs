@@ -801,7 +801,7 @@ where
     let mut chart = ChartBuilder::on(root)
         .margin(12)
         .caption(title, ("sans-serif", 18))
-        .x_label_area_size(40)
+        .x_label_area_size(55)
         .y_label_area_size(50)
         .build_cartesian_2d(x0..x1, y0..y1)?;
     chart
@@ -838,14 +838,15 @@ where
         .legend(|(x, y)| TriangleMarker::new((x, y), 7, RGBColor(0, 114, 178).filled()));
     chart
         .configure_series_labels()
+        .position(SeriesLabelPosition::UpperLeft)
         .background_style(WHITE.mix(0.85))
         .border_style(BLACK)
         .draw()?;
-    root.draw(&Text::new(
+    chart.draw_series(std::iter::once(Text::new(
         "colour: probability of the true state, vermillion = 0 … blue = 1; black: A and B",
-        (70, SIZE.1 as i32 - 18),
+        (x0 + 0.02 * (x1 - x0), y0 + 0.06 * (y1 - y0)),
         ("sans-serif", 12),
-    ))?;
+    )))?;
     Ok(())
 }
 

@@ -180,6 +180,11 @@ fn reliability(out: &std::path::Path, r: &ReasonCalculusResult) -> Result<Vec<Pa
     )
 }
 
+/// A ratio that may be undefined (nothing to divide by).
+fn ratio(v: Option<f64>) -> String {
+    v.map_or_else(|| "–".to_owned(), |x| format!("{x:.3}"))
+}
+
 fn print_summary(results: &[ReasonCalculusResult]) {
     println!(
         "{:<14} {:<8} {:<24} {:>7} {:>8} {:>8} {:>8} {:>8}",
@@ -201,8 +206,14 @@ fn print_summary(results: &[ReasonCalculusResult]) {
         }
         let c = &r.check;
         println!(
-            "{:<14} check    {} sets, {} wrong; {} flagged, {} of them wrong (precision {:.3}, recall {:.3})",
-            r.calculus, c.sets, c.wrong, c.flagged, c.flagged_wrong, c.precision, c.recall
+            "{:<14} check    {} sets, {} wrong; {} flagged, {} of them wrong (precision {}, recall {})",
+            r.calculus,
+            c.sets,
+            c.wrong,
+            c.flagged,
+            c.flagged_wrong,
+            ratio(c.precision),
+            ratio(c.recall)
         );
     }
 }
@@ -277,15 +288,15 @@ fn report(
         let c = &r.check;
         let _ = writeln!(
             md,
-            "| {} | {} | {} | {} | {} | {} | {:.3} | {:.3} | {:.3} |",
+            "| {} | {} | {} | {} | {} | {} | {} | {} | {:.3} |",
             r.calculus,
             c.sets,
             c.wrong,
             if c.consistent { "yes" } else { "no" },
             c.flagged,
             c.flagged_wrong,
-            c.precision,
-            c.recall,
+            ratio(c.precision),
+            ratio(c.recall),
             c.base_rate
         );
     }

@@ -171,35 +171,68 @@ pub struct Score {
     pub bins: Vec<CalibrationBin>,
 }
 
+/// Sums over scored predictions. Ties among the most probable states are broken at random
+/// in expectation (a uniform prediction scores 1 − 1/Q, not the frequency of state 0).
 #[derive(Default, Clone)]
 struct Accumulator {
     n: usize,
-    wrong: usize,
-    top2: usize,
-    dist: u64,
+    wrong: f64,
+    top2: f64,
+    dist: f64,
     log_loss: f64,
     covered: usize,
-    bins: [(usize, f64, usize); 10],
+    /// Per bin of P(ML): count, sum of P(ML), expected number right.
+    bins: [(usize, f64, f64); 10],
 }
 
 impl Accumulator {
     fn add(&mut self, calc: &Calculus, p: &[f64], truth: StateId) {
         let q = p.len();
-        let mut order: Vec<usize> = (0..q).collect();
-        order.sort_by(|a, b| p[*b].total_cmp(&p[*a]).then(a.cmp(b)));
-        let ml = StateId(order[0] as u16);
+        let pm = p.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+        let tol = 1e-12 * pm.abs().max(1e-300);
+        let tied: Vec<usize> = (0..q).filter(|i| (p[*i] - pm).abs() <= tol).collect();
+        let hit = if tied.contains(&truth.index()) {
+            1.0 / tied.len() as f64
+        } else {
+            0.0
+        };
+        // Top 2: states strictly above the second-best value are in; those equal to it share
+        // the remaining slots.
+        let mut sorted = p.to_vec();
+        sorted.sort_by(|a, b| b.total_cmp(a));
+        let second = sorted[1.min(q - 1)];
+        let tol2 = 1e-12 * second.abs().max(1e-300);
+        let above = p.iter().filter(|v| **v > second + tol2).count();
+        let equal = p.iter().filter(|v| (**v - second).abs() <= tol2).count();
+        let pt = p[truth.index()];
+        let in_top2 = if pt > second + tol2 {
+            1.0
+        } else if (pt - second).abs() <= tol2 {
+            (2usize.saturating_sub(above)) as f64 / equal.max(1) as f64
+        } else {
+            0.0
+        };
         self.n += 1;
-        self.wrong += usize::from(ml != truth);
-        self.top2 += usize::from(!order[..2.min(q)].contains(&truth.index()));
-        self.dist += u64::from(calc.neighbours().distance(ml, truth).unwrap_or(0));
-        self.log_loss -= p[truth.index()].max(1e-12).ln();
+        self.wrong += 1.0 - hit;
+        self.top2 += 1.0 - in_top2.min(1.0);
+        self.dist += tied
+            .iter()
+            .map(|i| {
+                f64::from(
+                    calc.neighbours()
+                        .distance(StateId(*i as u16), truth)
+                        .unwrap_or(0),
+                )
+            })
+            .sum::<f64>()
+            / tied.len() as f64;
+        self.log_loss -= pt.max(1e-12).ln();
         let h: f64 = p.iter().filter(|v| **v > 0.0).map(|v| -v * v.ln()).sum();
         self.covered += usize::from(h < (q as f64).ln() - 0.05);
-        let pm = p[ml.index()];
         let bin = ((pm * 10.0) as usize).min(9);
         self.bins[bin].0 += 1;
         self.bins[bin].1 += pm;
-        self.bins[bin].2 += usize::from(ml == truth);
+        self.bins[bin].2 += hit;
     }
 
     fn score(&self) -> Score {
@@ -218,7 +251,7 @@ impl Accumulator {
                     0.0
                 },
                 accuracy: if *count > 0 {
-                    *right as f64 / *count as f64
+                    *right / *count as f64
                 } else {
                     0.0
                 },
@@ -226,9 +259,9 @@ impl Accumulator {
             .collect();
         Score {
             n: self.n,
-            error_rate: self.wrong as f64 / n,
-            top2_error: self.top2 as f64 / n,
-            mean_neighbor_distance: self.dist as f64 / n,
+            error_rate: self.wrong / n,
+            top2_error: self.top2 / n,
+            mean_neighbor_distance: self.dist / n,
             log_loss: self.log_loss / n,
             coverage: self.covered as f64 / n,
             calibration_error: bins
@@ -266,10 +299,10 @@ pub struct CheckScore {
     pub flagged: usize,
     /// Flagged sets that are truly wrong.
     pub flagged_wrong: usize,
-    /// flagged_wrong / flagged (1 when nothing is flagged).
-    pub precision: f64,
-    /// flagged_wrong / wrong (1 when nothing is wrong).
-    pub recall: f64,
+    /// flagged_wrong / flagged (`None` when nothing is flagged).
+    pub precision: Option<f64>,
+    /// flagged_wrong / wrong (`None` when nothing is wrong).
+    pub recall: Option<f64>,
     /// The error rate of random flags at the same count: wrong / sets.
     pub base_rate: f64,
 }
@@ -304,6 +337,9 @@ pub struct ReasonCalculusResult {
     pub calculus: String,
     /// Number of states.
     pub states: usize,
+    /// Whether some general-position compose entry excludes a state (else inference can only
+    /// return uniform).
+    pub informative_compose: bool,
     /// (a) hidden sets on the recording.
     pub hidden: Predictors,
     /// (b) triplets never seen together in the simulated world.
@@ -561,16 +597,10 @@ pub fn run_reason_study(
             consistent: checked.consistent,
             flagged: checked.flagged.len(),
             flagged_wrong,
-            precision: if checked.flagged.is_empty() {
-                1.0
-            } else {
-                flagged_wrong as f64 / checked.flagged.len() as f64
-            },
-            recall: if wrong_sets.is_empty() {
-                1.0
-            } else {
-                flagged_wrong as f64 / wrong_sets.len() as f64
-            },
+            precision: (!checked.flagged.is_empty())
+                .then(|| flagged_wrong as f64 / checked.flagged.len() as f64),
+            recall: (!wrong_sets.is_empty())
+                .then(|| flagged_wrong as f64 / wrong_sets.len() as f64),
             base_rate: wrong_sets.len() as f64 / sets.len().max(1) as f64,
         };
         progress();
@@ -607,9 +637,16 @@ pub fn run_reason_study(
             }
             progress();
         }
+        let generic =
+            qsr_core::reason::Algebra::of(&calc, qsr_core::reason::TableScope::GeneralPosition)?;
+        let informative_compose = calc.states().any(|r| {
+            calc.states()
+                .any(|s| generic.compose(r, s).len() < calc.n_states())
+        });
         out.push(ReasonCalculusResult {
             calculus: calc.name().to_owned(),
             states: calc.n_states(),
+            informative_compose,
             hidden,
             unseen: predictors(&accs_b.0, &accs_b.1, &accs_b.2, None),
             unseen_reached: predictors(&reached_b.0, &reached_b.1, &reached_b.2, None),
@@ -756,12 +793,26 @@ pub fn claims(r: &ReasonCalculusResult, fusion: Fusion) -> Vec<Claim> {
             "{}: the check's flags are wrong more often than a random entry",
             r.calculus
         ),
-        ours: format!(
-            "precision {:.3} ({} of {} flags) vs base rate {:.3}",
-            c.precision, c.flagged_wrong, c.flagged, c.base_rate
-        ),
-        holds: c.flagged > 0 && c.precision > c.base_rate,
+        ours: match c.precision {
+            Some(p) => format!(
+                "precision {p:.3} ({} of {} flags) vs base rate {:.3}",
+                c.flagged_wrong, c.flagged, c.base_rate
+            ),
+            None => format!(
+                "nothing flagged (the most likely states pass closure; {} of {} wrong)",
+                c.wrong, c.sets
+            ),
+        },
+        holds: c.precision.is_some_and(|p| p > c.base_rate),
     });
+    if !r.informative_compose {
+        for claim in &mut out {
+            claim.ours.push_str(
+                " — this calculus's general-position compose table is universal: composition \
+                 carries no information",
+            );
+        }
+    }
     out
 }
 
@@ -779,4 +830,85 @@ pub fn best_fusion(results: &[ReasonCalculusResult]) -> Option<Fusion> {
         };
         loss(*a).total_cmp(&loss(*b))
     })
+}
+
+#[cfg(test)]
+mod tests {
+    #![allow(clippy::unwrap_used)]
+
+    use super::*;
+
+    #[test]
+    fn a_uniform_prediction_scores_as_chance_not_as_state_zero() {
+        let calc = Calculus::builtin("double-cross").unwrap();
+        let q = calc.n_states();
+        let mut acc = Accumulator::default();
+        // Truth is always state 0: an argmax with lowest-id ties would score 0 % error.
+        for _ in 0..10 {
+            acc.add(&calc, &vec![1.0 / q as f64; q], StateId(0));
+        }
+        let s = acc.score();
+        assert!(
+            (s.error_rate - (1.0 - 1.0 / q as f64)).abs() < 1e-12,
+            "{}",
+            s.error_rate
+        );
+        assert!(
+            (s.top2_error - (1.0 - 2.0 / q as f64)).abs() < 1e-12,
+            "{}",
+            s.top2_error
+        );
+        assert!((s.log_loss - (q as f64).ln()).abs() < 1e-12);
+        assert!(s.coverage.abs() < 1e-12);
+        // A confident right prediction and a confident wrong one.
+        let mut acc = Accumulator::default();
+        let mut p = vec![0.0; q];
+        p[2] = 1.0;
+        acc.add(&calc, &p, StateId(2));
+        acc.add(&calc, &p, StateId(3));
+        let s = acc.score();
+        assert!((s.error_rate - 0.5).abs() < 1e-12);
+        assert_eq!(s.bins[9].count, 2);
+        assert!((s.bins[9].accuracy - 0.5).abs() < 1e-12);
+        assert!((s.calibration_error - 0.5).abs() < 1e-12);
+    }
+
+    #[test]
+    fn claims_are_judged_from_the_numbers() {
+        let score = |err: f64, loss: f64| Score {
+            n: 10,
+            error_rate: err,
+            log_loss: loss,
+            ..Score::default()
+        };
+        let mut r = ReasonCalculusResult {
+            calculus: "x".into(),
+            informative_compose: true,
+            ..ReasonCalculusResult::default()
+        };
+        r.hidden.inferred.insert("fitted".into(), score(0.2, 0.5));
+        r.hidden.prior = score(0.8, 1.5);
+        r.check = CheckScore {
+            sets: 10,
+            wrong: 2,
+            flagged: 0,
+            precision: None,
+            base_rate: 0.2,
+            ..CheckScore::default()
+        };
+        let c = claims(&r, Fusion::Fitted);
+        assert!(c[0].holds, "{c:?}");
+        let check = c.last().unwrap();
+        assert!(!check.holds, "nothing flagged is not a precise check");
+        assert!(check.ours.contains("nothing flagged"));
+        // Worse than the prior in log loss: the claim fails.
+        r.hidden.inferred.insert("fitted".into(), score(0.2, 2.0));
+        assert!(!claims(&r, Fusion::Fitted)[0].holds);
+        r.informative_compose = false;
+        assert!(
+            claims(&r, Fusion::Fitted)[0]
+                .ours
+                .contains("no information")
+        );
+    }
 }
