@@ -24,6 +24,10 @@ pub enum ReasonCmd {
     /// One algebraically closed scenario refining the network (SparQ's
     /// `scenario-consistency first`): `{"consistent": bool, "constraints": [...] | null}`.
     Scenario(ScenarioArgs),
+    /// A saved PQRM map as a constraint network (for `close`, `scenario` or SparQ): each
+    /// observed ordering constrained to its most likely state, or to every state whose
+    /// probability reaches --threshold; sets never observed are universal.
+    Export(ExportArgs),
     /// Consistency check of a saved PQRM map: the most likely entries closure contradicts,
     /// and an irreducible set of them whose relaxation restores consistency (greedy by
     /// belief), with their probabilities.
@@ -45,6 +49,19 @@ pub struct CheckArgs {
     /// Print the result as JSON.
     #[arg(long)]
     pub json: bool,
+}
+
+/// `qrm reason export`.
+#[derive(Debug, clap::Args)]
+pub struct ExportArgs {
+    /// A saved map.
+    pub map: PathBuf,
+    /// Keep every state with at least this probability (default: the most likely only).
+    #[arg(long)]
+    pub threshold: Option<f64>,
+    /// Output form.
+    #[arg(long, value_enum, default_value_t = NetworkFormat::Json)]
+    pub format: NetworkFormat,
 }
 
 /// `qrm reason infer`.
@@ -258,6 +275,7 @@ pub fn run(cmd: ReasonCmd) -> Result<()> {
                 ),
             }
         }
+        ReasonCmd::Export(args) => export(&args),
         ReasonCmd::Check(args) => check(&args),
         ReasonCmd::Infer(args) => infer(&args),
         ReasonCmd::Study(args) => crate::reason_report::study(&args),
@@ -266,6 +284,21 @@ pub fn run(cmd: ReasonCmd) -> Result<()> {
 
 fn load_map(path: &std::path::Path) -> Result<pqrm::Pqrm> {
     pqrm::Pqrm::load(path).with_context(|| format!("loading the map {}", path.display()))
+}
+
+fn export(args: &ExportArgs) -> Result<()> {
+    let map = load_map(&args.map)?;
+    let selection = match args.threshold {
+        None => pqrm::reason::Selection::MostLikely,
+        Some(t) if (0.0..=1.0).contains(&t) => pqrm::reason::Selection::AboveProbability(t),
+        Some(t) => bail!("--threshold must be a probability in [0, 1], got {t}"),
+    };
+    let net = pqrm::reason::to_network(&map, selection)?;
+    match args.format {
+        NetworkFormat::Json => println!("{}", net.to_json()),
+        NetworkFormat::Sparq => println!("{}", net.to_sparq()),
+    }
+    Ok(())
 }
 
 fn check(args: &CheckArgs) -> Result<()> {

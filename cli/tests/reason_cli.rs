@@ -178,6 +178,54 @@ fn check_and_infer_work_on_a_saved_map() {
     let v: Value = serde_json::from_str(&out).unwrap();
     assert_eq!(v["consistent"], true, "{out}");
     assert_eq!(v["flagged"].as_array().unwrap().len(), 0);
+    // The map as a network closes consistent through the narrow interface, and the export
+    // with a threshold keeps at least the most likely states.
+    let net = ok(&["reason", "export", map.to_str().unwrap()], "");
+    let closed: Value = serde_json::from_str(&ok(
+        &["reason", "close", "--calculus", "double-cross"],
+        &net,
+    ))
+    .unwrap();
+    assert_eq!(closed["consistent"], true);
+    assert_eq!(triplet_map(&closed).len(), 8 * 7 * 6);
+    let loose: Value = serde_json::from_str(&ok(
+        &[
+            "reason",
+            "export",
+            map.to_str().unwrap(),
+            "--threshold",
+            "0.0001",
+        ],
+        "",
+    ))
+    .unwrap();
+    let strict: Value = serde_json::from_str(&net).unwrap();
+    for (k, labels) in triplet_map(&strict) {
+        let l = &triplet_map(&loose)[&k];
+        assert!(labels.iter().all(|x| l.contains(x)), "{k:?}");
+    }
+    let sparq = ok(
+        &[
+            "reason",
+            "export",
+            map.to_str().unwrap(),
+            "--format",
+            "sparq",
+        ],
+        "",
+    );
+    assert!(sparq.starts_with("(("), "{sparq}");
+    let out = qrm(
+        &[
+            "reason",
+            "export",
+            map.to_str().unwrap(),
+            "--threshold",
+            "2",
+        ],
+        "",
+    );
+    assert_eq!(out.status.code(), Some(1));
     // {1,2,8} was never seen together (1 and 8 are in different halves).
     let inferred = dir.join("inferred.json");
     let out = ok(

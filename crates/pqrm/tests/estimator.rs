@@ -459,7 +459,7 @@ fn the_closed_form_orderings_equal_direct_classification_in_every_calculus() {
             assert_eq!(counts, direct, "{name} {set:?}");
         }
     }
-    assert_eq!(tried, 6, "the six point calculi");
+    assert_eq!(tried, 9, "the ternary built-ins");
 }
 
 /// Zero noise on a lattice puts landmarks exactly on lines and circles of each other's

@@ -12,13 +12,19 @@ use crate::frame::FrameKind;
 use crate::spec::{CalculusSpec, ConstraintSpec, Shape, Side, StateSpec};
 
 /// Spec files shipped with the crate, by name.
-pub const BUILTIN_SPECS: [(&str, &str); 7] = [
+pub const BUILTIN_SPECS: [(&str, &str); 10] = [
     ("edc", include_str!("../calculi/edc.toml")),
     ("edc-lune", include_str!("../calculi/edc-lune.toml")),
     ("triple-cross", include_str!("../calculi/triple-cross.toml")),
     ("double-cross", include_str!("../calculi/double-cross.toml")),
     ("quadrant", include_str!("../calculi/quadrant.toml")),
     ("left-right", include_str!("../calculi/left-right.toml")),
+    ("single-cross", include_str!("../calculi/single-cross.toml")),
+    (
+        "relative-distance",
+        include_str!("../calculi/relative-distance.toml"),
+    ),
+    ("tpcc", include_str!("../calculi/tpcc.toml")),
     (
         "front-between-behind",
         include_str!("../calculi/front-between-behind.toml"),
@@ -37,13 +43,16 @@ pub const POINT_CALCULI: [&str; 6] = [
 ];
 
 /// Names listed by `qrm calculus list` (`star-m` accepts any even m from 2 to 32).
-pub const BUILTIN_NAMES: [&str; 9] = [
+pub const BUILTIN_NAMES: [&str; 12] = [
     "edc",
     "edc-lune",
     "triple-cross",
     "double-cross",
     "quadrant",
     "left-right",
+    "single-cross",
+    "relative-distance",
+    "tpcc",
     "star-4",
     "star-8",
     "front-between-behind",

@@ -325,3 +325,45 @@ fn a_rasterised_calculus_composes_and_permutes_like_the_original() {
         }
     }
 }
+
+/// TPCC's states are SparQ's sectors (Moratz & Ragni; SparQ's `qualify_tpcc`): the angle of
+/// C about B measured from the direction A→B, counter-clockwise, in sectors of 45°, named by
+/// side and nearer axis, and close/distant by |BC| against |AB|. Checked by geometry on random
+/// configurations away from the boundaries, not by reading our spec back.
+#[test]
+fn tpcc_states_are_sparqs_sectors() {
+    let tpcc = Calculus::builtin("tpcc").unwrap();
+    assert_eq!(tpcc.n_states(), 16);
+    let mut rng = ChaCha8Rng::seed_from_u64(12);
+    let sectors = ["lf", "fl", "bl", "lb", "rb", "br", "fr", "rf"];
+    let mut seen = std::collections::BTreeSet::new();
+    for _ in 0..20_000 {
+        let p: [f64; 6] = std::array::from_fn(|_| rng.random_range(-10.0..10.0));
+        let (ex, ey) = (p[2] - p[0], p[3] - p[1]);
+        let (dx, dy) = (p[4] - p[2], p[5] - p[3]);
+        let theta = (ex * dy - ey * dx).atan2(ex * dx + ey * dy); // (−π, π], left positive
+        let eighth = theta / std::f64::consts::FRAC_PI_4;
+        let ratio = (dx * dx + dy * dy).sqrt() / (ex * ex + ey * ey).sqrt();
+        if (eighth - eighth.round()).abs() < 1e-6 || (ratio - 1.0).abs() < 1e-6 {
+            continue; // on a sector boundary or the circle
+        }
+        let k = if eighth >= 0.0 {
+            eighth.floor() as usize
+        } else {
+            (8.0 + eighth.floor()) as usize
+        };
+        let sector = sectors[k];
+        let want = format!("{}{sector}", if ratio < 1.0 { 'c' } else { 'd' });
+        let got = tpcc.label(tpcc.classify_row(&p).unwrap());
+        assert_eq!(got, want, "at {p:?} (θ = {theta:.4})");
+        seen.insert(want);
+    }
+    assert_eq!(seen.len(), 16, "every state met");
+    // TPCC refines the single cross (same line AB and perpendicular at B).
+    let scc = Calculus::builtin("single-cross").unwrap();
+    let m = tpcc.merge_map(&scc).unwrap();
+    assert_eq!(
+        scc.label(m.as_slice()[tpcc.state("cfl").unwrap().index()]),
+        "left-front"
+    );
+}

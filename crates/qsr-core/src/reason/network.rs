@@ -382,8 +382,9 @@ impl Network {
         format!("({})", parts.join(" "))
     }
 
-    /// A network from JSON: `{"points": [...]?, "constraints": [["A", "B", "C", ["label",
-    /// ...]], ...]}`. Points are the listed ones, then those named by constraints in order of
+    /// A network from JSON: `{"calculus": NAME?, "points": [...]?, "constraints": [["A", "B",
+    /// "C", ["label", ...]], ...]}` (a `calculus` key, as [`Network::to_json`] writes, must name
+    /// `calculus`). Points are the listed ones, then those named by constraints in order of
     /// first appearance; a triplet given twice gets the intersection.
     ///
     /// # Errors
@@ -399,6 +400,17 @@ impl Network {
         let object = value.as_object().ok_or_else(|| {
             network_error("top level", "expected an object {\"constraints\": [...]}")
         })?;
+        if let Some(named) = object.get("calculus").and_then(serde_json::Value::as_str)
+            && named != calculus.name()
+        {
+            return Err(network_error(
+                "calculus",
+                format!(
+                    "the network is over calculus `{named}`, but `{}` was given",
+                    calculus.name()
+                ),
+            ));
+        }
         let mut names: Vec<String> = Vec::new();
         if let Some(points) = object.get("points") {
             let points = points
