@@ -175,6 +175,8 @@ fn study(a: StudyArgs) -> Result<()> {
         config.landmarks = l;
     }
     config.seed = a.seed;
+    // Every input is checked before anything is created on disk.
+    config.validate()?;
     std::fs::create_dir_all(&a.out).with_context(|| format!("creating {}", a.out.display()))?;
     let total = (config.trials * config.sigmas.len()) as u64;
     let pb = crate::progress::bar(total, "Monte Carlo trials");
@@ -346,7 +348,13 @@ fn plot_study(out: &Path, r: &MonteCarloResult, finest: &Calculus) -> Result<()>
             m,
         )?;
     }
-    let names: Vec<String> = r.config.calculi.clone();
+    // Calculus names as the results carry them (the configuration may hold spec-file paths).
+    let mut names: Vec<String> = Vec::new();
+    for l in &r.levels {
+        if !names.contains(&l.calculus) {
+            names.push(l.calculus.clone());
+        }
+    }
     let all = |f: &dyn Fn(&pqrm::study::LevelResult) -> (f64, f64)| {
         names.iter().map(|c| series_of(r, c, f)).collect::<Vec<_>>()
     };

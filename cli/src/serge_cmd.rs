@@ -44,8 +44,9 @@ pub struct RunArgs {
     /// Grid cells per side.
     #[arg(long, default_value_t = 200)]
     pub grid: usize,
-    /// Grid window `x0,x1,y0,y1` (default: around the beliefs).
-    #[arg(long, value_delimiter = ',', num_args = 4)]
+    /// Grid window `x0,x1,y0,y1` (default: around the beliefs); negative values work as
+    /// `--window -10,10,-5,5`.
+    #[arg(long, value_delimiter = ',', allow_hyphen_values = true)]
     pub window: Option<Vec<f64>>,
     /// Seed.
     #[arg(long, default_value_t = 0)]
@@ -97,7 +98,12 @@ pub struct LearnArgs {
     #[arg(long, default_value_t = 64)]
     pub grid: usize,
     /// Normalised window `x0,x1,y0,y1`.
-    #[arg(long, value_delimiter = ',', num_args = 4, default_values_t = [-3.0, 3.0, -2.5, 3.5])]
+    #[arg(
+        long,
+        value_delimiter = ',',
+        allow_hyphen_values = true,
+        default_values_t = [-3.0, 3.0, -2.5, 3.5]
+    )]
     pub window: Vec<f64>,
     /// Trials (default 100·K).
     #[arg(long)]

@@ -212,6 +212,116 @@ fn map_reads_mrclam_with_its_ground_truth() {
     std::fs::remove_dir_all(&out).ok();
 }
 
+/// Regression (issue 17): sizes that overflowed an allocation (`--samples 2^64−1`: capacity
+/// overflow, exit 101) or ran away (`--trials 10^9`, `--landmarks 100000`) are refused up
+/// front with a typed error and the estimate, before anything is written.
+#[test]
+fn impossible_sizes_are_refused_before_any_work() {
+    let out = tmp("sizes");
+    let max = u64::MAX.to_string();
+    let line = r#"{"points": [[0,0],[0,10],[-1,5]], "cov": [[0,0,0],[0,0,0],[1,0,1]]}"#;
+    let o = qrm(
+        &["pqrm", "prob", "--calculus", "edc", "--samples", &max],
+        line,
+    );
+    assert_eq!(o.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("GiB per landmark"));
+    let study_out = out.join("study");
+    for flags in [
+        vec!["--samples", max.as_str()],
+        vec!["--trials", "1000000000"],
+        vec!["--landmarks", "100000"],
+    ] {
+        let mut args = vec![
+            "pqrm",
+            "study",
+            "--quick",
+            "--out",
+            study_out.to_str().unwrap(),
+        ];
+        args.extend(flags.iter().copied());
+        let start = std::time::Instant::now();
+        let o = qrm(&args, "");
+        assert_eq!(o.status.code(), Some(1), "{flags:?}");
+        assert!(
+            start.elapsed().as_secs() < 20,
+            "{flags:?} was not refused up front"
+        );
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(
+            err.contains("samples") || err.contains("triplet-samples") || err.contains("landmarks"),
+            "{err}"
+        );
+    }
+    let obs = out.join("obs.csv");
+    std::fs::write(&obs, "t,robot,landmark,x,y,cxx,cxy,cyy\n0,0,1,0,0,1,0,1\n").unwrap();
+    let o = qrm(
+        &[
+            "map",
+            "--format",
+            "csv",
+            "--input",
+            obs.to_str().unwrap(),
+            "--calculus",
+            "edc",
+            "--samples",
+            &max,
+            "--out",
+            out.join("m").to_str().unwrap(),
+        ],
+        "",
+    );
+    assert_eq!(o.status.code(), Some(1));
+    assert!(!out.join("m").join("map.json").exists());
+    std::fs::remove_dir_all(&out).ok();
+}
+
+/// Regression (issue 17): every calculus error inside the mapper was reported as "landmarks
+/// … coincide" (`pqrm prob --calculus star-4` → "landmarks [0, 1, 2] coincide: arity
+/// mismatch"). The real cause is named now.
+#[test]
+fn a_calculus_of_the_wrong_kind_is_not_called_coincident_landmarks() {
+    let line = r#"{"points": [[0,0],[0,10],[-1,5]], "cov": [[0,0,0],[0,0,0],[1,0,1]]}"#;
+    let o = qrm(
+        &["pqrm", "prob", "--calculus", "star-4", "--samples", "10"],
+        line,
+    );
+    assert_eq!(o.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !err.contains("coincide") && err.contains("not ternary"),
+        "{err}"
+    );
+}
+
+/// Regression (issue 17): `--calculi` with a spec file indexed the baselines by the path
+/// instead of the calculus name and panicked after writing most outputs.
+#[test]
+fn study_with_a_spec_file_calculus_does_not_panic() {
+    let out = tmp("study-spec");
+    let spec = out.join("mine.toml");
+    std::fs::write(&spec, ok(&["calculus", "spec", "double-cross"], "")).unwrap();
+    let calculi = format!("edc,{}", spec.display());
+    ok(
+        &[
+            "pqrm",
+            "study",
+            "--quick",
+            "--calculi",
+            &calculi,
+            "--trials",
+            "2",
+            "--out",
+            out.to_str().unwrap(),
+        ],
+        "",
+    );
+    let report = std::fs::read_to_string(out.join("report.md")).unwrap();
+    assert!(report.contains("Fig 2.11a"));
+    assert!(out.join("fig2_11a_error_rate.svg").exists());
+    std::fs::remove_dir_all(&out).ok();
+}
+
 #[test]
 fn the_quick_study_writes_data_plots_and_a_report() {
     let out = tmp("study");

@@ -215,3 +215,60 @@ fn learn_a_calculus_from_a_simulated_drive() {
         serde_json::from_str(&std::fs::read_to_string(out.join("compose.json")).unwrap()).unwrap();
     assert_eq!(compose["method"], "algorithm-3-intervals");
 }
+
+/// Regression (issue 17): `--window x0,x1,y0,y1` as documented failed ("4 values required, 1
+/// was provided"), and the space form refused any negative coordinate — so no window left of
+/// or below the origin could be given. Both forms work now; a wrong count is a clear error.
+#[test]
+fn a_window_with_negative_coordinates_is_accepted() {
+    let dir = tmp("serge_window");
+    let input = dir.join("beliefs.json");
+    std::fs::write(
+        &input,
+        r#"{"beliefs": [{"mean": [-4, -3], "cov": [[0.1, 0], [0, 0.1]]},
+                        {"mean": [3, 2], "cov": [[0.1, 0], [0, 0.1]]}]}"#,
+    )
+    .unwrap();
+    for window in [
+        vec!["--window", "-10,10,-8,8"],
+        vec!["--window=-10,10,-8,8"],
+    ] {
+        let out = dir.join("out");
+        let mut args = vec![
+            "serge",
+            "run",
+            "--beliefs",
+            input.to_str().unwrap(),
+            "--mu",
+            "2",
+            "--trials",
+            "4",
+            "--grid",
+            "40",
+            "--out",
+            out.to_str().unwrap(),
+        ];
+        args.extend(window.iter().copied());
+        common::ok(&args, "");
+        let map: Value =
+            serde_json::from_str(&std::fs::read_to_string(out.join("map.json")).unwrap()).unwrap();
+        assert_eq!(map["n_regions"], 2, "{window:?}");
+    }
+    let o = common::qrm(
+        &[
+            "serge",
+            "run",
+            "--beliefs",
+            input.to_str().unwrap(),
+            "--mu",
+            "2",
+            "--window",
+            "-10,10,-8",
+            "--out",
+            dir.join("bad").to_str().unwrap(),
+        ],
+        "",
+    );
+    assert_eq!(o.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("four numbers"));
+}

@@ -73,12 +73,17 @@ pub fn set_counts(
             samples.columns(k),
             buffer,
         )
-        .map_err(|e| {
-            let ids = samples.ids();
-            PqrmError::CoincidentLandmarks {
-                set: [ids[i].0, ids[j].0, ids[k].0],
-                reason: e.to_string(),
+        .map_err(|e| match e {
+            // Only a degenerate frame means coincident landmarks; any other calculus error
+            // (a calculus of the wrong kind, say) is reported as what it is.
+            qsr_core::QsrError::DegenerateFrame { .. } => {
+                let ids = samples.ids();
+                PqrmError::CoincidentLandmarks {
+                    set: [ids[i].0, ids[j].0, ids[k].0],
+                    reason: e.to_string(),
+                }
             }
+            other => PqrmError::Calculus(other),
         })?;
     let mut counts = vec![0u32; calculus.n_states()];
     for s in buffer.iter() {

@@ -77,13 +77,15 @@ fn numbers(path: &Path, lineno: usize, fields: &[&str]) -> Result<Vec<f64>> {
         .collect()
 }
 
-/// Groups `(t, robot, observation)` rows into validated scans sorted by time then robot.
-fn group(rows: Vec<(f64, u32, Observation)>) -> Result<Vec<Scan>> {
+/// Groups `(t, robot, observation, line)` rows into validated scans sorted by time then
+/// robot; a landmark seen twice in one scan is an error naming both lines of `path`.
+fn group(rows: Vec<(f64, u32, Observation, usize)>, path: &Path) -> Result<Vec<Scan>> {
     let mut rows = rows;
     rows.sort_by(|a, b| {
         a.0.total_cmp(&b.0)
             .then(a.1.cmp(&b.1))
             .then(a.2.id.cmp(&b.2.id))
+            .then(a.3.cmp(&b.3))
     });
     let mut scans = Vec::new();
     let mut i = 0;
@@ -93,6 +95,17 @@ fn group(rows: Vec<(f64, u32, Observation)>) -> Result<Vec<Scan>> {
         while j < rows.len() && rows[j].0 == t && rows[j].1 == robot {
             j += 1;
         }
+        if let Some(w) = rows[i..j].windows(2).find(|w| w[0].2.id == w[1].2.id) {
+            return Err(parse_err(
+                path,
+                w[1].3,
+                format!(
+                    "landmark {} appears twice in the scan at t = {t} of robot {robot} (first on \
+                     line {})",
+                    w[1].2.id, w[0].3
+                ),
+            ));
+        }
         scans.push(Scan::new(
             t,
             robot,
@@ -101,6 +114,20 @@ fn group(rows: Vec<(f64, u32, Observation)>) -> Result<Vec<Scan>> {
         i = j;
     }
     Ok(scans)
+}
+
+/// A numeric field that must be an id: an integer in `0..=u32::MAX` (no saturating cast
+/// that would turn `-6.7`, `NaN` or `1e10` into a real landmark's id).
+fn id_field(path: &Path, line: usize, field: &str, v: f64) -> Result<u32> {
+    if v.is_finite() && v >= 0.0 && v.fract() == 0.0 && v <= f64::from(u32::MAX) {
+        Ok(v as u32)
+    } else {
+        Err(parse_err(
+            path,
+            line,
+            format!("{field} must be an integer in 0..={}, got {v}", u32::MAX),
+        ))
+    }
 }
 
 /// Reads our observation CSV.
@@ -160,10 +187,17 @@ pub fn read_csv(path: &Path) -> Result<Dataset> {
         if !v[0].is_finite() {
             return Err(parse_err(path, lineno, "time is not finite"));
         }
-        rows.push((v[0], robot as u32, obs));
+        rows.push((v[0], robot as u32, obs, lineno));
+    }
+    if rows.is_empty() {
+        return Err(parse_err(
+            path,
+            1,
+            "no observations: the file has a header and nothing else",
+        ));
     }
     Ok(Dataset {
-        scans: group(rows)?,
+        scans: group(rows, path)?,
         truth: None,
         skipped: 0,
     })
@@ -204,12 +238,11 @@ pub fn read_truth_csv(path: &Path) -> Result<GroundTruth> {
             return Err(parse_err(path, i + 1, "expected `landmark,x,y`"));
         }
         let v = numbers(path, i + 1, &f)?;
-        if v[0] < 0.0 || v[0].fract() != 0.0 || !v[1].is_finite() || !v[2].is_finite() {
-            return Err(parse_err(path, i + 1, "bad landmark id or position"));
+        let id = id_field(path, i + 1, "landmark", v[0])?;
+        if !v[1].is_finite() || !v[2].is_finite() {
+            return Err(parse_err(path, i + 1, "bad landmark position"));
         }
-        truth
-            .positions
-            .insert(LandmarkId(v[0] as u32), [v[1], v[2]]);
+        truth.positions.insert(LandmarkId(id), [v[1], v[2]]);
     }
     Ok(truth)
 }
@@ -245,9 +278,9 @@ pub fn read_mrclam(dir: &Path, noise: RangeBearingNoise) -> Result<Dataset> {
                 "expected `subject x y ...`",
             ));
         }
-        truth
-            .positions
-            .insert(LandmarkId(v[0] as u32), [v[1], v[2]]);
+        let gt = file("Landmark_Groundtruth.dat");
+        let id = id_field(&gt, line, "subject", v[0])?;
+        truth.positions.insert(LandmarkId(id), [v[1], v[2]]);
     }
     let mut barcode_to_subject = BTreeMap::new();
     for (line, v) in dat_rows(&file("Barcodes.dat"))? {
@@ -258,7 +291,11 @@ pub fn read_mrclam(dir: &Path, noise: RangeBearingNoise) -> Result<Dataset> {
                 "expected `subject barcode`",
             ));
         }
-        barcode_to_subject.insert(v[1] as u32, v[0] as u32);
+        let bc = file("Barcodes.dat");
+        barcode_to_subject.insert(
+            id_field(&bc, line, "barcode", v[1])?,
+            id_field(&bc, line, "subject", v[0])?,
+        );
     }
     let mut rows = Vec::new();
     let mut skipped = 0;
@@ -277,7 +314,11 @@ pub fn read_mrclam(dir: &Path, noise: RangeBearingNoise) -> Result<Dataset> {
                     "expected `time barcode range bearing`",
                 ));
             }
-            let subject = barcode_to_subject.get(&(v[1] as u32)).copied();
+            if !v[0].is_finite() {
+                return Err(parse_err(&path, line, "time is not finite"));
+            }
+            let barcode = id_field(&path, line, "barcode", v[1])?;
+            let subject = barcode_to_subject.get(&barcode).copied();
             match subject {
                 Some(s) if truth.positions.contains_key(&LandmarkId(s)) => {
                     let obs = Observation::from_range_bearing(
@@ -288,7 +329,7 @@ pub fn read_mrclam(dir: &Path, noise: RangeBearingNoise) -> Result<Dataset> {
                         noise.sigma_bearing,
                     )
                     .map_err(|e| parse_err(&path, line, e.to_string()))?;
-                    rows.push((v[0], robot, obs));
+                    rows.push((v[0], robot, obs, line));
                 }
                 _ => skipped += 1,
             }
@@ -313,7 +354,7 @@ pub fn read_mrclam(dir: &Path, noise: RangeBearingNoise) -> Result<Dataset> {
     rows.dedup_by(|b, a| a.0 == b.0 && a.1 == b.1 && a.2.id == b.2.id);
     skipped += before - rows.len();
     Ok(Dataset {
-        scans: group(rows)?,
+        scans: group(rows, dir)?,
         truth: Some(truth),
         skipped,
     })
@@ -340,20 +381,33 @@ pub fn read_g2o(path: &Path) -> Result<Dataset> {
                     ));
                 }
                 let v = numbers(path, i + 1, &f[1..])?;
+                if !v[0].is_finite() {
+                    return Err(parse_err(path, i + 1, "pose is not finite"));
+                }
                 let obs = Observation::new(
-                    LandmarkId(v[1] as u32),
+                    LandmarkId(id_field(path, i + 1, "landmark", v[1])?),
                     [v[2], v[3]],
                     [[v[4], v[5]], [v[5], v[6]]],
                 )
                 .map_err(|e| parse_err(path, i + 1, e.to_string()))?;
-                rows.push((v[0], 0, obs));
+                rows.push((v[0], 0, obs, i + 1));
             }
             None => {}
             Some(_) => skipped += 1,
         }
     }
+    if rows.is_empty() {
+        return Err(parse_err(
+            path,
+            1,
+            format!(
+                "no `LANDMARK pose id x y cxx cxy cyy` line among {} lines: not a g2o landmark file?",
+                text.lines().count()
+            ),
+        ));
+    }
     Ok(Dataset {
-        scans: group(rows)?,
+        scans: group(rows, path)?,
         truth: None,
         skipped,
     })

@@ -41,15 +41,37 @@ impl Default for PqrmConfig {
     }
 }
 
+/// The most samples per landmark per step a mapper accepts: 16 MB of samples per landmark
+/// in view, a thousand times the thesis's 1000. More is refused up front rather than left to
+/// fail an allocation (or overflow a size) mid-run.
+pub const MAX_SAMPLES: usize = 1_000_000;
+
+/// Checks a samples-per-landmark count against `1..=MAX_SAMPLES`.
+///
+/// # Errors
+/// [`PqrmError::InvalidConfig`] with the memory the count would take.
+pub fn check_samples(samples: usize) -> Result<()> {
+    if samples == 0 {
+        return Err(PqrmError::InvalidConfig("samples must be >= 1".into()));
+    }
+    if samples > MAX_SAMPLES {
+        let gib = samples as f64 * 16.0 / f64::from(1u32 << 30);
+        return Err(PqrmError::InvalidConfig(format!(
+            "samples = {samples} would take {gib:.3e} GiB per landmark in view (16 bytes a \
+             sample); at most {MAX_SAMPLES} are accepted (the thesis uses 1000)"
+        )));
+    }
+    Ok(())
+}
+
 impl PqrmConfig {
     /// Checks the ranges.
     ///
     /// # Errors
-    /// [`PqrmError::InvalidConfig`] for zero samples or a negative/non-finite floor.
+    /// [`PqrmError::InvalidConfig`] for samples outside `1..=MAX_SAMPLES` or a
+    /// negative/non-finite floor.
     pub fn validate(&self) -> Result<()> {
-        if self.samples == 0 {
-            return Err(PqrmError::InvalidConfig("samples must be >= 1".into()));
-        }
+        check_samples(self.samples)?;
         if !(self.floor.is_finite() && self.floor >= 0.0) {
             return Err(PqrmError::InvalidConfig(format!(
                 "floor must be finite and >= 0, got {}",

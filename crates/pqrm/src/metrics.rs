@@ -38,9 +38,12 @@ impl GroundTruth {
         calculus
             .classify_triplet(a, b, c)
             .map(Some)
-            .map_err(|e| PqrmError::CoincidentLandmarks {
-                set: set.ids(),
-                reason: e.to_string(),
+            .map_err(|e| match e {
+                qsr_core::QsrError::DegenerateFrame { .. } => PqrmError::CoincidentLandmarks {
+                    set: set.ids(),
+                    reason: e.to_string(),
+                },
+                other => PqrmError::Calculus(other),
             })
     }
 

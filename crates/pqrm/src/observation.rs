@@ -46,19 +46,26 @@ impl Observation {
             || format!("landmark {id}: covariance {cov:?}"),
             &[cov[0][0], cov[0][1], cov[1][0], cov[1][1]],
         )?;
-        let scale = cov[0][0].abs() + cov[1][1].abs() + f64::MIN_POSITIVE;
         let bad = |reason| PqrmError::BadCovariance {
             id: id.0,
             cov,
             reason,
         };
-        if (cov[0][1] - cov[1][0]).abs() > COV_TOL * scale {
+        // Scale-free: divide by the largest entry first, so no product below overflows (a
+        // determinant of 1e200·1e200 − 1e250² is inf − inf = NaN, and NaN < tol is false).
+        let m = cov.iter().flatten().fold(0.0f64, |acc, v| acc.max(v.abs()));
+        if m == 0.0 {
+            return Ok(Self { id, mean, cov });
+        }
+        let [[a, b], [b2, d]] = cov.map(|row| row.map(|v| v / m));
+        let scale = a.abs() + d.abs() + f64::MIN_POSITIVE;
+        if (b - b2).abs() > COV_TOL * scale.max(b.abs()) {
             return Err(bad("not symmetric"));
         }
-        if cov[0][0] < 0.0 || cov[1][1] < 0.0 {
+        if a < 0.0 || d < 0.0 {
             return Err(bad("negative variance"));
         }
-        let det = cov[0][0] * cov[1][1] - cov[0][1] * cov[0][1];
+        let det = a * d - b * b;
         if det < -COV_TOL * scale * scale {
             return Err(bad("negative determinant"));
         }

@@ -66,6 +66,13 @@ impl CalculusFamily {
     }
 }
 
+/// The most landmarks per simulated world in the Monte Carlo study.
+pub const MAX_STUDY_LANDMARKS: usize = 200;
+
+/// The most triplet-samples one Monte Carlo run may classify (about 28 core-hours at 1 ns
+/// each; the full-scale study is about 2 × 10^11).
+pub const MAX_STUDY_WORK: f64 = 1e14;
+
 /// Settings of the Monte Carlo study (defaults: DESIGN §4 at full scale).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct MonteCarloConfig {
@@ -136,7 +143,12 @@ impl MonteCarloConfig {
         self.world / 12f64.sqrt()
     }
 
-    fn validate(&self) -> Result<()> {
+    /// Checks every setting, loads the calculi and estimates the work, before anything runs.
+    ///
+    /// # Errors
+    /// [`PqrmError::InvalidConfig`] naming the setting (with the work estimate when it is too
+    /// large); calculus errors.
+    pub fn validate(&self) -> Result<()> {
         let bad = |m: String| Err(PqrmError::InvalidConfig(m));
         if self.sigmas.is_empty() || self.sigmas.iter().any(|s| !(s.is_finite() && *s >= 0.0)) {
             return bad(format!(
@@ -144,15 +156,37 @@ impl MonteCarloConfig {
                 self.sigmas
             ));
         }
-        if self.trials == 0 || self.samples == 0 {
-            return bad("trials and samples must be >= 1".into());
+        if self.trials == 0 {
+            return bad("trials must be >= 1".into());
         }
-        if self.landmarks < 3 {
-            return bad(format!("need at least 3 landmarks, got {}", self.landmarks));
+        crate::map::check_samples(self.samples)?;
+        if !(3..=MAX_STUDY_LANDMARKS).contains(&self.landmarks) {
+            return bad(format!(
+                "landmarks must be in 3..={MAX_STUDY_LANDMARKS}, got {}",
+                self.landmarks
+            ));
         }
         let pos = [self.world, self.radius, self.step_deg, self.range];
         if pos.iter().any(|v| !(v.is_finite() && *v > 0.0)) {
             return bad("world, radius, step and range must be finite and > 0".into());
+        }
+        // The calculi load and merge (a spec file that is missing or not a merge of the first
+        // fails here, not after the first outputs).
+        CalculusFamily::new(&self.calculi)?;
+        // The work before it starts: ordered triplet-samples over every level, trial and step
+        // (every landmark in view at worst). About 1 ns each on one core.
+        let levels = (self.sigmas.len() + self.detail_sigmas.len()) as f64;
+        let steps = (360.0 / self.step_deg).ceil();
+        let l = self.landmarks as f64;
+        let work =
+            levels * self.trials as f64 * steps * l * (l - 1.0) * (l - 2.0) * self.samples as f64;
+        if work > MAX_STUDY_WORK {
+            return bad(format!(
+                "this study would classify about {work:.2e} triplet-samples (≈ {:.0} core-hours at \
+                 1 ns each); the limit is {MAX_STUDY_WORK:.0e}: fewer trials, samples, landmarks or \
+                 levels",
+                work * 1e-9 / 3600.0
+            ));
         }
         Ok(())
     }
@@ -732,9 +766,7 @@ pub fn single_observation(
     floor: f64,
     seed: u64,
 ) -> Result<Vec<f64>> {
-    if samples == 0 {
-        return Err(PqrmError::InvalidConfig("samples must be >= 1".into()));
-    }
+    crate::map::check_samples(samples)?;
     if !(floor.is_finite() && floor >= 0.0) {
         return Err(PqrmError::InvalidConfig(format!(
             "floor must be finite and >= 0, got {floor}"

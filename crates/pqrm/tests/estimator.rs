@@ -317,6 +317,26 @@ fn range_bearing_covariance_matches_the_propagated_noise() {
 #[test]
 fn bad_inputs_get_typed_errors() {
     let id = LandmarkId(1);
+    // Regression (issue 17): the determinant 1e200·1e200 − (1e250)² overflowed to
+    // inf − inf = NaN, and NaN compares false, so this passed as positive semi-definite; the
+    // same with the symmetry test. The check is scale-free now.
+    assert!(matches!(
+        Observation::new(id, [0.0, 0.0], [[1e200, 1e250], [1e250, 1e200]]),
+        Err(PqrmError::BadCovariance {
+            reason: "negative determinant",
+            ..
+        })
+    ));
+    assert!(matches!(
+        Observation::new(id, [0.0, 0.0], [[1e300, 1e300], [-1e300, 1e300]]),
+        Err(PqrmError::BadCovariance {
+            reason: "not symmetric",
+            ..
+        })
+    ));
+    // Large but valid covariances still pass, tiny ones too.
+    assert!(Observation::new(id, [0.0, 0.0], [[1e300, 0.5e300], [0.5e300, 1e300]]).is_ok());
+    assert!(Observation::new(id, [0.0, 0.0], [[1e-300, 0.0], [0.0, 1e-300]]).is_ok());
     assert!(matches!(
         Observation::new(id, [f64::NAN, 0.0], Z),
         Err(PqrmError::NonFinite(_))

@@ -284,6 +284,64 @@ fn loaders_read_g2o_landmark_lines_and_reject_bad_ones() {
     std::fs::remove_dir_all(&dir).ok();
 }
 
+/// Regression (issue 17): ids went through saturating `as u32` casts (`-6.7` and `NaN` became
+/// landmark 0, `1e10` became 4294967295: landmarks silently merged), any text file read as an
+/// empty g2o dataset, and a header-only CSV as an empty one. Each is now an error naming the
+/// file, the line and the field.
+#[test]
+fn loaders_refuse_ids_that_are_not_integers_and_files_without_observations() {
+    let dir = std::env::temp_dir().join(format!("pqrm-ids-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let f = dir.join("x.g2o");
+    for (id, needle) in [
+        ("-6.7", "landmark"),
+        ("NaN", "landmark"),
+        ("1e10", "landmark"),
+    ] {
+        std::fs::write(&f, format!("LANDMARK 1 {id} 3.0 1.0 0.1 0.0 0.1\n")).unwrap();
+        let e = pqrm::loaders::read_g2o(&f).unwrap_err().to_string();
+        assert!(e.contains("x.g2o:1") && e.contains(needle), "{id}: {e}");
+    }
+    std::fs::write(&f, "# a README, not a g2o file\nhello world\n").unwrap();
+    let e = pqrm::loaders::read_g2o(&f).unwrap_err().to_string();
+    assert!(e.contains("no `LANDMARK"), "{e}");
+    let csv = dir.join("obs.csv");
+    std::fs::write(&csv, "t,robot,landmark,x,y,cxx,cxy,cyy\n").unwrap();
+    let e = pqrm::loaders::read_csv(&csv).unwrap_err().to_string();
+    assert!(e.contains("no observations"), "{e}");
+    // A landmark twice in one scan names the file and both lines (it named neither).
+    std::fs::write(
+        &csv,
+        "t,robot,landmark,x,y,cxx,cxy,cyy\n0,0,5,1,1,0.1,0,0.1\n0,0,5,1.1,1,0.1,0,0.1\n",
+    )
+    .unwrap();
+    let e = pqrm::loaders::read_csv(&csv).unwrap_err().to_string();
+    assert!(e.contains("obs.csv:3") && e.contains("first on line 2"), "{e}");
+    let truth = dir.join("truth.csv");
+    std::fs::write(&truth, "landmark,x,y\n1e10,0,0\n").unwrap();
+    let e = pqrm::loaders::read_truth_csv(&truth)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("truth.csv:2") && e.contains("landmark must be an integer"),
+        "{e}"
+    );
+    // MRCLAM: a barcode that is not an integer.
+    let m = dir.join("mrclam");
+    std::fs::create_dir_all(&m).unwrap();
+    std::fs::write(m.join("Landmark_Groundtruth.dat"), "6 1.0 2.0 0 0\n").unwrap();
+    std::fs::write(m.join("Barcodes.dat"), "6 72\n").unwrap();
+    std::fs::write(m.join("Robot1_Measurement.dat"), "0.0 72.5 1.0 0.1\n").unwrap();
+    let e = pqrm::loaders::read_mrclam(&m, pqrm::loaders::RangeBearingNoise::MRCLAM)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("Robot1_Measurement.dat:1") && e.contains("barcode"),
+        "{e}"
+    );
+    std::fs::remove_dir_all(&dir).ok();
+}
+
 #[test]
 fn study_shards_merge_into_the_single_run() {
     use pqrm::study::{aggregate_monte_carlo, run_monte_carlo_shard};

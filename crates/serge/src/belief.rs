@@ -133,15 +133,22 @@ impl Belief {
                     cov: *cov,
                     reason,
                 };
-                let scale = cov[0][0].abs().max(cov[1][1].abs()).max(f64::MIN_POSITIVE);
-                if (cov[0][1] - cov[1][0]).abs() > 1e-9 * scale {
-                    return Err(bad("not symmetric"));
-                }
-                if cov[0][0] <= 0.0 || cov[1][1] <= 0.0 {
+                // Scale-free: divide by the largest entry, so no product overflows (inf − inf
+                // = NaN would pass every `<` test).
+                let m = cov.iter().flatten().fold(0.0f64, |acc, v| acc.max(v.abs()));
+                if m == 0.0 {
                     return Err(bad("a variance is not positive"));
                 }
-                let det = cov[0][0] * cov[1][1] - cov[0][1] * cov[1][0];
-                if det <= 1e-12 * cov[0][0] * cov[1][1] {
+                let [[a, b], [b2, d]] = cov.map(|row| row.map(|v| v / m));
+                let scale = a.abs().max(d.abs()).max(f64::MIN_POSITIVE);
+                if (b - b2).abs() > 1e-9 * scale.max(b.abs()) {
+                    return Err(bad("not symmetric"));
+                }
+                if a <= 0.0 || d <= 0.0 {
+                    return Err(bad("a variance is not positive"));
+                }
+                let det = a * d - b * b2;
+                if det <= 1e-12 * a * d {
                     return Err(bad("singular: the belief is a line, not an area"));
                 }
                 Ok(())

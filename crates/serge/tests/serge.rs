@@ -145,6 +145,21 @@ fn the_naive_baseline_finds_the_same_map() {
 #[test]
 fn bad_input_gets_typed_errors() {
     assert!(matches!(BeliefSet::new(vec![]), Err(SergeError::Empty(_))));
+    // Regression (issue 17): 1e200·1e200 − (1e250)² overflowed to NaN and passed.
+    assert!(matches!(
+        BeliefSet::new(vec![Belief::gaussian(
+            [0.0, 0.0],
+            [[1e200, 1e250], [1e250, 1e200]]
+        )]),
+        Err(SergeError::DegenerateCovariance { .. })
+    ));
+    assert!(
+        BeliefSet::new(vec![Belief::gaussian(
+            [0.0, 0.0],
+            [[1e300, 0.0], [0.0, 1e300]]
+        )])
+        .is_ok()
+    );
     assert!(matches!(
         BeliefSet::new(vec![Belief::gaussian([0.0, 0.0], [[1.0, 1.0], [1.0, 1.0]])]),
         Err(SergeError::DegenerateCovariance { .. })
