@@ -188,3 +188,25 @@ fn quick_field_experiment_writes_its_report() {
     );
     assert!(!bad.status.success());
 }
+
+/// Regression (issue 17): `qlink study --pairs 0` exited 0 with an empty table. An empty
+/// study is an error now, as are non-positive settings, and nothing is written.
+#[test]
+fn an_empty_study_is_an_error() {
+    let out = std::env::temp_dir().join(format!("qrm-qlink-empty-{}", std::process::id()));
+    let o = common::qrm(
+        &[
+            "qlink",
+            "study",
+            "--quick",
+            "--pairs",
+            "0",
+            "--out",
+            out.to_str().unwrap(),
+        ],
+        "",
+    );
+    assert_eq!(o.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("pairs must be >= 1"));
+    assert!(!out.join("table.csv").exists());
+}

@@ -608,11 +608,21 @@ pub fn merge_counts(merge: &MergeMap, counts: &[u32]) -> Vec<u32> {
 
 /// Log-probabilities `ln p(q)` from counts with `floor` pseudo-counts per state.
 ///
-/// With `floor = 0` a state with no count gets `-inf`.
+/// With `floor = 0` a state with no count gets `-inf`. A negative or non-finite floor is
+/// treated as 0 (the mapper's configuration refuses one; this keeps the function total and
+/// free of NaN), and all-zero counts give uniform.
 #[must_use]
 pub fn log_likelihood(counts: &[u32], floor: f64) -> Vec<f64> {
+    let floor = if floor.is_finite() && floor > 0.0 {
+        floor
+    } else {
+        0.0
+    };
     let total: f64 =
         counts.iter().map(|&c| f64::from(c)).sum::<f64>() + floor * counts.len() as f64;
+    if total <= 0.0 {
+        return vec![-(counts.len().max(1) as f64).ln(); counts.len()];
+    }
     counts
         .iter()
         .map(|&c| ((f64::from(c) + floor) / total).ln())

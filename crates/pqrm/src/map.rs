@@ -485,12 +485,31 @@ impl Pqrm {
     }
 }
 
-/// Log-sum-exp normalisation (`-inf` entries stay `-inf`).
+/// Log-sum-exp normalisation (`-inf` entries stay `-inf`). Never returns NaN: entries of
+/// `+inf` share all the probability (they dominate every finite one), NaN entries count as
+/// impossible (`-inf`), and a vector with no possible entry becomes uniform.
 #[must_use]
 pub fn normalise(mut log_p: Vec<f64>) -> Vec<f64> {
+    let n = log_p.len();
+    log_p
+        .iter_mut()
+        .filter(|v| v.is_nan())
+        .for_each(|v| *v = f64::NEG_INFINITY);
+    let infinite = log_p.iter().filter(|v| **v == f64::INFINITY).count();
+    if infinite > 0 {
+        let share = -(infinite as f64).ln();
+        log_p.iter_mut().for_each(|v| {
+            *v = if *v == f64::INFINITY {
+                share
+            } else {
+                f64::NEG_INFINITY
+            };
+        });
+        return log_p;
+    }
     let max = log_p.iter().copied().fold(f64::NEG_INFINITY, f64::max);
     if max == f64::NEG_INFINITY {
-        let u = -(log_p.len() as f64).ln();
+        let u = -(n as f64).ln();
         log_p.iter_mut().for_each(|v| *v = u);
         return log_p;
     }

@@ -565,3 +565,26 @@ fn boundary_configurations_take_each_constraints_zero_side() {
         );
     }
 }
+
+/// Regression (issue 17): `normalise([inf, 0])` and `log_likelihood` with a negative floor
+/// returned NaN silently.
+#[test]
+fn normalise_and_log_likelihood_never_return_nan() {
+    use pqrm::map::normalise;
+    let p = normalise(vec![f64::INFINITY, 0.0]);
+    assert_eq!(p, vec![0.0, f64::NEG_INFINITY]);
+    let p = normalise(vec![f64::INFINITY, f64::INFINITY, 1.0]);
+    assert!((p[0] - 0.5f64.ln()).abs() < 1e-15 && p[2] == f64::NEG_INFINITY);
+    let p = normalise(vec![f64::NAN, 0.0]);
+    assert_eq!(p, vec![f64::NEG_INFINITY, 0.0]);
+    let p = normalise(vec![f64::NAN, f64::NAN]);
+    assert!(p.iter().all(|v| (v - 0.5f64.ln()).abs() < 1e-15));
+    for floor in [-1.0, -0.5, f64::NAN, f64::NEG_INFINITY, f64::INFINITY] {
+        for counts in [vec![0u32, 0], vec![3, 1], vec![0, 7]] {
+            let l = log_likelihood(&counts, floor);
+            assert!(l.iter().all(|v| !v.is_nan()), "floor {floor}, counts {counts:?}: {l:?}");
+            let total: f64 = l.iter().map(|v| v.exp()).sum();
+            assert!((total - 1.0).abs() < 1e-12, "{l:?}");
+        }
+    }
+}

@@ -316,7 +316,10 @@ fn loaders_refuse_ids_that_are_not_integers_and_files_without_observations() {
     )
     .unwrap();
     let e = pqrm::loaders::read_csv(&csv).unwrap_err().to_string();
-    assert!(e.contains("obs.csv:3") && e.contains("first on line 2"), "{e}");
+    assert!(
+        e.contains("obs.csv:3") && e.contains("first on line 2"),
+        "{e}"
+    );
     let truth = dir.join("truth.csv");
     std::fs::write(&truth, "landmark,x,y\n1e10,0,0\n").unwrap();
     let e = pqrm::loaders::read_truth_csv(&truth)

@@ -73,8 +73,33 @@ impl StudyConfig {
     /// The settings to run: `(trial, value)`.
     ///
     /// # Errors
-    /// [`QlinkError::InvalidParameter`] for an unknown trial name.
+    /// [`QlinkError::InvalidParameter`] for an unknown trial name, zero pairs (an empty table
+    /// is not a result), no settings, or a non-positive/non-finite setting, sample count or
+    /// step.
     pub fn settings(&self) -> Result<Vec<(String, f64)>> {
+        let bad = |m: String| Err(QlinkError::InvalidParameter(m));
+        if self.pairs == Some(0) {
+            return bad("pairs must be >= 1 (or all)".into());
+        }
+        if self.samples == 0 || self.samples > 1_000_000 {
+            return bad(format!(
+                "samples must be in 1..=1000000, got {}",
+                self.samples
+            ));
+        }
+        if !(self.step.is_finite() && self.step > 0.0) {
+            return bad(format!("step must be finite and > 0, got {}", self.step));
+        }
+        if let Some(v) = self
+            .range_factors
+            .iter()
+            .chain(&self.sizes)
+            .find(|v| !(v.is_finite() && **v > 0.0))
+        {
+            return bad(format!(
+                "range factors and sizes must be finite and > 0, got {v}"
+            ));
+        }
         let range = self
             .range_factors
             .iter()
@@ -88,6 +113,13 @@ impl StudyConfig {
                 "unknown trial `{t}` (sensor-range, occlusion, all)"
             ))),
         }
+        .and_then(|v: Vec<(String, f64)>| {
+            if v.is_empty() {
+                bad(format!("trial `{}` has no settings to run", self.trial))
+            } else {
+                Ok(v)
+            }
+        })
     }
 }
 

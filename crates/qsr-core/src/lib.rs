@@ -91,7 +91,8 @@ pub use permute::{Permutation, PermutationTable, all_orderings};
 #[cfg(feature = "svg")]
 pub use render::{RenderOptions, register_font, render_svg};
 pub use spec::{
-    CalculusSpec, ConstraintSpec, MAX_CONSTRAINTS, OutsideRule, RasterSpec, Shape, Side, StateSpec,
+    CalculusSpec, ConstraintSpec, MAX_CONSTRAINTS, MAX_FEATURE_EXTENT, MIN_FEATURE_SIZE,
+    OutsideRule, RasterSpec, Shape, Side, StateSpec,
 };
 
 /// Re-exported so users need not depend on nalgebra to call the API.

@@ -39,6 +39,15 @@ use serde::{Deserialize, Serialize};
 use crate::error::{QsrError, Result, spec_error};
 use crate::frame::FrameKind;
 
+/// How far from the normalised frame (A = (0, 0), B = (0, 1)) a line, circle or raster window
+/// may lie. The derived tables are sampled; the sampler's probe windows grow with the
+/// features, and a feature at 1e308 makes them infinite.
+pub const MAX_FEATURE_EXTENT: f64 = 1e6;
+
+/// The smallest circle radius or raster window side (a subnormal window leaves the sampler
+/// an empty range).
+pub const MIN_FEATURE_SIZE: f64 = 1e-6;
+
 /// Which side of a constraint its zero set (the curve itself) belongs to, so that every
 /// point of the plane has exactly one state.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
@@ -276,6 +285,13 @@ impl CalculusSpec {
                     if a == 0.0 && b == 0.0 {
                         return Err(err(format!("{what}: a line needs (a, b) != (0, 0)")));
                     }
+                    let offset = c.abs() / a.hypot(b);
+                    if offset.is_nan() || offset > MAX_FEATURE_EXTENT {
+                        return Err(err(format!(
+                            "{what}: the line lies {offset:e} from A; features must lie within \
+                             {MAX_FEATURE_EXTENT:e} of the frame (A = (0, 0), B = (0, 1))"
+                        )));
+                    }
                 }
                 Shape::Circle { center, radius } => {
                     if !(center[0].is_finite() && center[1].is_finite() && radius.is_finite()) {
@@ -283,6 +299,17 @@ impl CalculusSpec {
                     }
                     if radius <= 0.0 {
                         return Err(err(format!("{what}: radius must be > 0, got {radius}")));
+                    }
+                    let far = center[0].hypot(center[1]);
+                    if !(far <= MAX_FEATURE_EXTENT
+                        && (MIN_FEATURE_SIZE..=MAX_FEATURE_EXTENT).contains(&radius))
+                    {
+                        return Err(err(format!(
+                            "{what}: centre {center:?} and radius {radius:e} must lie within \
+                             {MAX_FEATURE_EXTENT:e} of the frame and the radius be at least \
+                             {MIN_FEATURE_SIZE:e} (A = (0, 0), B = (0, 1)): beyond that the \
+                             sampler that derives the tables cannot reach the circle"
+                        )));
                     }
                 }
             }
@@ -323,6 +350,14 @@ impl CalculusSpec {
         if !r.window.iter().all(|v| v.is_finite()) || x1 <= x0 || y1 <= y0 {
             return Err(err(format!(
                 "raster window {:?} must be finite with x_min < x_max, y_min < y_max",
+                r.window
+            )));
+        }
+        let extent = r.window.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        if extent > MAX_FEATURE_EXTENT || x1 - x0 < MIN_FEATURE_SIZE || y1 - y0 < MIN_FEATURE_SIZE {
+            return Err(err(format!(
+                "raster window {:?} must lie within {MAX_FEATURE_EXTENT:e} of the frame and be at \
+                 least {MIN_FEATURE_SIZE:e} wide and high",
                 r.window
             )));
         }

@@ -133,6 +133,11 @@ fn bad_specs_get_clear_errors() {
     assert!(msg.contains("`ghost` is unreachable"), "{msg}");
     assert!(spec_err(&format!("{head}[[constraint]]\nkind = \"circle\"\ncenter = [0.0, 0.0]\nradius = -1.0\nzero = \"negative\"\n{}", st("a", "*"))).contains("radius must be > 0"));
     assert!(spec_err(&format!("{head}[[constraint]]\nkind = \"line\"\na = 0.0\nb = 0.0\nc = 1.0\nzero = \"negative\"\n{}", st("a", "*"))).contains("(a, b) != (0, 0)"));
+    // Regression (issue 17): a circle centred at 1e308 made the sampler's probe window
+    // infinite and `coverage.rs` panicked on load, in every command; a line that far too.
+    assert!(spec_err(&format!("{head}[[constraint]]\nkind = \"circle\"\ncenter = [1e308, 0.0]\nradius = 1.0\nzero = \"negative\"\n{}{}", st("in", "-"), st("out", "+"))).contains("must lie within"));
+    assert!(spec_err(&format!("{head}[[constraint]]\nkind = \"circle\"\ncenter = [0.0, 0.0]\nradius = 1e-300\nzero = \"negative\"\n{}{}", st("in", "-"), st("out", "+"))).contains("radius"));
+    assert!(spec_err(&format!("{head}[[constraint]]\nkind = \"line\"\na = 1.0\nb = 0.0\nc = 1e300\nzero = \"negative\"\n{}{}", st("l", "-"), st("r", "+"))).contains("must lie within"));
     assert!(spec_err(&format!("{head}{}", st("a", ""))).contains("constraints or a raster"));
     assert!(spec_err("name = \"x\"\nframe = \"quaternary\"\n").contains("TOML"));
     assert!(
@@ -151,6 +156,14 @@ fn bad_specs_get_clear_errors() {
     };
     assert!(spec_err(&raster("[0]")).contains("expected nx·ny = 2"));
     assert!(spec_err(&raster("[0, 3]")).contains("not a state index"));
+    // Regression (issue 17): a subnormal window passed `show` and panicked permute/compose
+    // ("cannot sample empty range").
+    let tiny = raster("[0, 0]").replace("[0.0, 1.0, 0.0, 1.0]", "[0.0, 1e-310, 0.0, 1.0]");
+    assert!(
+        spec_err(&tiny).contains("wide and high"),
+        "{}",
+        spec_err(&tiny)
+    );
     // Files.
     assert!(matches!(
         Calculus::from_path(std::path::Path::new("/nonexistent/x.toml")),

@@ -109,6 +109,12 @@ fn v(p: [f64; 2]) -> Vector {
     Vector::new(p[0] as f32, p[1] as f32)
 }
 
+/// How far from the origin a world's bounds, landmarks and walls may lie (m).
+pub const MAX_WORLD_EXTENT: f64 = 1e5;
+
+/// The smallest width and height of a world's bounds (m).
+pub const MIN_WORLD_SIZE: f64 = 0.01;
+
 impl World {
     /// Builds and validates a world.
     ///
@@ -121,6 +127,54 @@ impl World {
             spec.bounds.iter().all(|b| b.is_finite()) && x1 > x0 && y1 > y0,
             || format!("bounds {:?} must be finite with min < max", spec.bounds),
         )?;
+        // rapier works in f32 and the pictures in pixels: a world of 1e30 m, or one narrower
+        // than a centimetre, has no meaningful simulation (and used to hang the plot).
+        let inside = |v: f64| v.abs() <= MAX_WORLD_EXTENT;
+        check(
+            spec.bounds.iter().all(|b| inside(*b))
+                && x1 - x0 >= MIN_WORLD_SIZE
+                && y1 - y0 >= MIN_WORLD_SIZE,
+            || {
+                format!(
+                    "bounds {:?} must lie within ±{MAX_WORLD_EXTENT:e} m and be at least \
+                     {MIN_WORLD_SIZE} m wide and high",
+                    spec.bounds
+                )
+            },
+        )?;
+        let sized = |pos: &[f64; 2], r: f64| {
+            pos.iter().all(|c| inside(*c))
+                && (MIN_WORLD_SIZE / 100.0..=MAX_WORLD_EXTENT).contains(&r)
+        };
+        for l in &spec.landmarks {
+            check(
+                sized(&l.pos, l.radius) || !l.radius.is_finite() || l.radius <= 0.0,
+                || {
+                    format!(
+                        "landmark {}: position {:?} and radius {} must lie within ±{MAX_WORLD_EXTENT:e} m \
+                     (radius at least {} m)",
+                        l.id,
+                        l.pos,
+                        l.radius,
+                        MIN_WORLD_SIZE / 100.0
+                    )
+                },
+            )?;
+        }
+        for w in &spec.walls {
+            check(
+                w.start
+                    .iter()
+                    .chain(&w.end)
+                    .all(|c| !c.is_finite() || inside(*c)),
+                || {
+                    format!(
+                        "wall {}: end points must lie within ±{MAX_WORLD_EXTENT:e} m",
+                        w.id
+                    )
+                },
+            )?;
+        }
         let mut ids = std::collections::BTreeSet::new();
         for l in &spec.landmarks {
             check(

@@ -296,6 +296,28 @@ fn impossible_parameters_are_errors() {
         },
     ];
     assert!(World::new(dup).is_err());
+    // Regression (issue 17): a landmark radius of 1e30, bounds narrower than 1e-7 m or positions
+    // beyond f32 made `qrm sim` hang in the scenario picture (a circle of 2^31 pixels) or reach
+    // rapier as inf. Refused up front now.
+    let mut huge = ok.clone();
+    huge.landmarks.push(PointLandmark {
+        id: 1,
+        pos: [0.5, 0.5],
+        radius: 1e30,
+    });
+    assert!(format!("{}", World::new(huge).unwrap_err()).contains("must lie within"));
+    let narrow = WorldSpec {
+        bounds: [0.0, 1e-7, 0.0, 1.0],
+        ..WorldSpec::default()
+    };
+    assert!(format!("{}", World::new(narrow).unwrap_err()).contains("wide and high"));
+    let mut far = ok.clone();
+    far.landmarks.push(PointLandmark {
+        id: 2,
+        pos: [1e39, 0.5],
+        radius: 0.1,
+    });
+    assert!(World::new(far).is_err());
     let w = World::new(ok).unwrap();
     let mut rng = ChaCha8Rng::seed_from_u64(1);
     let p = Pose::default();
