@@ -582,7 +582,10 @@ fn normalise_and_log_likelihood_never_return_nan() {
     for floor in [-1.0, -0.5, f64::NAN, f64::NEG_INFINITY, f64::INFINITY] {
         for counts in [vec![0u32, 0], vec![3, 1], vec![0, 7]] {
             let l = log_likelihood(&counts, floor);
-            assert!(l.iter().all(|v| !v.is_nan()), "floor {floor}, counts {counts:?}: {l:?}");
+            assert!(
+                l.iter().all(|v| !v.is_nan()),
+                "floor {floor}, counts {counts:?}: {l:?}"
+            );
             let total: f64 = l.iter().map(|v| v.exp()).sum();
             assert!((total - 1.0).abs() < 1e-12, "{l:?}");
         }
