@@ -263,6 +263,17 @@ fn contradiction_names_the_emptied_constraint_and_its_chain() {
     let quiet = close_with(net2, &alg, &ClosureOptions::without_explanation()).unwrap();
     let q = quiet.contradiction.unwrap();
     assert!(q.steps.is_empty());
+    // Constraints that exclude each other from the start are named as such.
+    let mut given = Network::universal(&dc, ["A", "B", "C"]).unwrap();
+    given
+        .constrain_labels("A", "B", "C", &["left-front"])
+        .unwrap();
+    given
+        .constrain_labels("A", "B", "C", &["right-back"])
+        .unwrap();
+    let closed = close(given, &alg).unwrap();
+    let text = closed.contradiction.unwrap().describe(&closed.network);
+    assert!(text.contains("{A,B:C} is empty as given"), "{text}");
 }
 
 fn alg_compose_labels(_alg: &Algebra, calc: &Calculus, r: &str, s: &str) -> Vec<String> {

@@ -130,13 +130,20 @@ impl Contradiction {
             Rule::Composition { left, right } => format!("{} ∘ {}", name(left), name(right)),
             Rule::Unrecorded => "refined (provenance not kept)".to_owned(),
         };
-        let mut out = format!(
-            "{} became empty: it was {} and {} allows only {}",
-            name(&self.triplet),
-            set(&self.before),
-            rule(&self.rule),
-            set(&self.allowed)
-        );
+        let mut out = if self.rule == Rule::Given {
+            format!(
+                "{} is empty as given: the constraints on it exclude each other",
+                name(&self.triplet)
+            )
+        } else {
+            format!(
+                "{} became empty: it was {} and {} allows only {}",
+                name(&self.triplet),
+                set(&self.before),
+                rule(&self.rule),
+                set(&self.allowed)
+            )
+        };
         if !self.steps.is_empty() {
             out.push_str("\nbecause:");
             for s in &self.steps {
@@ -336,6 +343,10 @@ fn explain(c: &mut Contradiction, net: &Network, reasons: &[Reason], max_steps: 
     }
 }
 
+/// Unordered triplets whose compositions are evaluated together (in parallel) before being
+/// applied.
+const CHUNK: usize = 512;
+
 /// A refinement proposed by one triplet's compositions: `target ∩= allowed`.
 struct Proposal {
     target: u32,
@@ -378,26 +389,34 @@ impl Propagation {
             self.stats.triplets_processed += frontier.len();
             for &t in &frontier {
                 queued[t] = false;
-                self.sync_permutations(net, alg, t)?;
             }
-            let snapshot: &Network = net;
-            let proposals: Vec<Vec<Proposal>> = frontier
-                .par_iter()
-                .map(|&t| compositions(snapshot, alg, t))
-                .collect();
             let mut next = Vec::new();
-            for p in proposals.into_iter().flatten() {
-                let target = p.target as usize;
-                if self.refine(
-                    net,
-                    target,
-                    &p.allowed,
-                    Reason::Composition(p.left, p.right),
-                )? {
-                    let canon = canonical(net, target);
-                    if !queued[canon] {
-                        queued[canon] = true;
-                        next.push(canon);
+            // Fixed-size chunks (never thread-count dependent): each chunk's compositions are
+            // evaluated in parallel against the network as the chunks before it left it, then
+            // applied in order. Bounded memory (a round over all triplets of 200 points would
+            // otherwise hold ~10^9 proposals), and later chunks see earlier refinements.
+            for chunk in frontier.chunks(CHUNK) {
+                for &t in chunk {
+                    self.sync_permutations(net, alg, t)?;
+                }
+                let snapshot: &Network = net;
+                let proposals: Vec<Vec<Proposal>> = chunk
+                    .par_iter()
+                    .map(|&t| compositions(snapshot, alg, t))
+                    .collect();
+                for p in proposals.into_iter().flatten() {
+                    let target = p.target as usize;
+                    if self.refine(
+                        net,
+                        target,
+                        &p.allowed,
+                        Reason::Composition(p.left, p.right),
+                    )? {
+                        let canon = canonical(net, target);
+                        if !queued[canon] {
+                            queued[canon] = true;
+                            next.push(canon);
+                        }
                     }
                 }
             }
