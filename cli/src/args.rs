@@ -187,7 +187,8 @@ pub enum CalculusCmd {
     },
     /// Classify configurations read from stdin, one per line, printing one label per line.
     ///
-    /// Ternary: `ax ay bx by cx cy`; binary oriented: `ox oy yaw cx cy`; extended:
+    /// Ternary: `ax ay bx by cx cy`; binary oriented: `ox oy yaw cx cy`; OPRA:
+    /// `ax ay a_heading bx by b_heading`; extended:
     /// `p1x p1y q1x q1y p2x p2y q2x q2y cx cy`. Blank lines and `#` comments are skipped.
     Classify {
         /// Built-in name or spec file.
@@ -201,28 +202,37 @@ pub enum CalculusCmd {
         #[arg(long)]
         json: bool,
     },
-    /// The composition table {AB:C} ∘ {BC:D} → {AB:D}.
+    /// The composition table {AB:C} ∘ {BC:D} → {AB:D}; for binary calculi (opra-M, star-m)
+    /// {A:B} ∘ {B:C} → {A:C}, derived exactly and cached on disk (QRM_CACHE_DIR, else
+    /// $XDG_CACHE_HOME/qrm or ~/.cache/qrm; QRM_CACHE_DIR="" turns the cache off).
     Compose {
         /// Built-in name or spec file.
         name: String,
         /// Print JSON `{"states", "table": {r: {s: [t...]}}}`.
         #[arg(long)]
         json: bool,
+        /// Binary calculi: print GQR's text form, one `r : s :: ( t ... )` per line.
+        #[arg(long, conflicts_with = "json")]
+        gqr: bool,
         /// `sampled` (witnessed configurations, any calculus) or `cells` (thesis Algorithm 3
         /// over a learned calculus's raster with interval bounds: sound by construction).
         #[arg(long, default_value = "sampled")]
         method: String,
     },
-    /// A permutation operation table.
+    /// A permutation operation table (ternary calculi) or the converse (binary calculi).
     Permute {
         /// Built-in name or spec file.
         name: String,
-        /// inverse, shortcut, shortcut-inverse, homing or homing-inverse.
+        /// Ternary: inverse, shortcut, shortcut-inverse, homing or homing-inverse; binary
+        /// (opra-M, star-m): converse.
         #[arg(long)]
         op: String,
         /// Print JSON `{"states", "table": {r: [t...]}}`.
         #[arg(long)]
         json: bool,
+        /// Binary calculi: print GQR's text form, one `r :: t` per line.
+        #[arg(long, conflicts_with = "json")]
+        gqr: bool,
     },
     /// Draw the partition as SVG.
     Render {

@@ -5,15 +5,21 @@ use std::io::{BufRead, Write};
 use std::path::PathBuf;
 
 use anyhow::{Context, Result, bail};
+use qsr_core::binary::{BINARY_NAMES, BinaryCalculus, is_binary_name};
 use qsr_core::{BUILTIN_NAMES, Calculus, Permutation, RenderOptions, StateId};
 use serde_json::json;
 
 use crate::args::CalculusCmd;
+use crate::binary_cmd::{BinaryJob, TableFormat};
 use crate::output::write_atomic;
 
 /// Validated form of a `calculus` subcommand (stage two of argument parsing).
 enum Job {
     List,
+    Binary {
+        calculus: BinaryCalculus,
+        job: BinaryJob,
+    },
     Show {
         calculus: Calculus,
         json: bool,
@@ -50,7 +56,90 @@ fn load(name: &str) -> Result<Calculus> {
     Calculus::resolve(name).with_context(|| format!("loading calculus `{name}`"))
 }
 
+fn load_binary(name: &str) -> Result<BinaryCalculus> {
+    BinaryCalculus::builtin(name).with_context(|| format!("loading calculus `{name}`"))
+}
+
+/// Binary calculi: everything of `opra-M`; composition, converse and neighbours of `star-m`
+/// (its classification, spec and picture are those of the oriented spec calculus).
+fn validate_binary(cmd: &CalculusCmd) -> Result<Option<Job>> {
+    let opra = |n: &str| n.starts_with("opra-");
+    let job = match cmd {
+        CalculusCmd::Show { name, json } if opra(name) => (name, BinaryJob::Show { json: *json }),
+        CalculusCmd::Classify { name } if opra(name) => (name, BinaryJob::Classify),
+        CalculusCmd::Spec { name, .. } if opra(name) => bail!(
+            "`{name}` is a binary calculus derived by angle arithmetic, not a spec file; \
+             `qrm calculus show {name}` lists its relations"
+        ),
+        CalculusCmd::Render { name, out, width } if opra(name) => (
+            name,
+            BinaryJob::Render {
+                out: out.clone(),
+                width: *width,
+            },
+        ),
+        CalculusCmd::Neighbours { name, json } if is_binary_name(name) => {
+            (name, BinaryJob::Neighbours { json: *json })
+        }
+        CalculusCmd::Compose {
+            name,
+            json,
+            gqr,
+            method,
+        } if is_binary_name(name) => {
+            if method != "sampled" {
+                bail!(
+                    "--method {method} is for learned ternary calculi; `{name}`'s composition is \
+                     derived exactly"
+                );
+            }
+            (
+                name,
+                BinaryJob::Compose {
+                    format: TableFormat::of(*json, *gqr),
+                },
+            )
+        }
+        CalculusCmd::Permute {
+            name,
+            op,
+            json,
+            gqr,
+        } if is_binary_name(name) => {
+            if op != "converse" {
+                bail!("`{name}` is binary: its one permutation is `--op converse`, not `{op}`");
+            }
+            (
+                name,
+                BinaryJob::Converse {
+                    format: TableFormat::of(*json, *gqr),
+                },
+            )
+        }
+        CalculusCmd::Permute { name, op, .. } if op == "converse" => bail!(
+            "`converse` is the permutation of binary calculi (opra-M, star-m); `{name}` is \
+             ternary: inverse, shortcut, shortcut-inverse, homing or homing-inverse"
+        ),
+        CalculusCmd::Compose {
+            gqr: true, name, ..
+        }
+        | CalculusCmd::Permute {
+            gqr: true, name, ..
+        } => {
+            bail!("--gqr prints binary calculi in GQR's format; `{name}` is ternary")
+        }
+        _ => return Ok(None),
+    };
+    Ok(Some(Job::Binary {
+        calculus: load_binary(job.0)?,
+        job: job.1,
+    }))
+}
+
 fn validate(cmd: CalculusCmd) -> Result<Job> {
+    if let Some(job) = validate_binary(&cmd)? {
+        return Ok(job);
+    }
     Ok(match cmd {
         CalculusCmd::List => Job::List,
         CalculusCmd::Show { name, json } => Job::Show {
@@ -68,7 +157,9 @@ fn validate(cmd: CalculusCmd) -> Result<Job> {
             calculus: load(&name)?,
             json,
         },
-        CalculusCmd::Compose { name, json, method } => Job::Compose {
+        CalculusCmd::Compose {
+            name, json, method, ..
+        } => Job::Compose {
             calculus: load(&name)?,
             json,
             cells: match method.as_str() {
@@ -77,7 +168,7 @@ fn validate(cmd: CalculusCmd) -> Result<Job> {
                 other => bail!("unknown compose method `{other}` (sampled or cells)"),
             },
         },
-        CalculusCmd::Permute { name, op, json } => {
+        CalculusCmd::Permute { name, op, json, .. } => {
             let op: Permutation = op.parse()?;
             Job::Permute {
                 calculus: load(&name)?,
@@ -111,10 +202,11 @@ pub fn run(cmd: CalculusCmd) -> Result<()> {
     let mut out = stdout.lock();
     match job {
         Job::List => {
-            for n in BUILTIN_NAMES {
+            for n in BUILTIN_NAMES.iter().chain(&BINARY_NAMES) {
                 writeln!(out, "{n}")?;
             }
         }
+        Job::Binary { calculus, job } => crate::binary_cmd::run(&mut out, &calculus, job)?,
         Job::Show { calculus, json } => show(&mut out, &calculus, json)?,
         Job::Spec { calculus, json } => {
             let text = if json {
@@ -234,6 +326,16 @@ fn show(out: &mut impl Write, c: &Calculus, json: bool) -> Result<()> {
 }
 
 fn classify(out: &mut impl Write, c: &Calculus) -> Result<()> {
+    classify_stdin(out, |row| Ok(c.label(c.classify_row(row)?).to_owned()))
+}
+
+/// Reads configurations from stdin, one per line (blank lines and `#` comments skipped), and
+/// prints one label per line — only once every line classified, so a bad line leaves no
+/// partial output.
+pub fn classify_stdin(
+    out: &mut impl Write,
+    label_of: impl Fn(&[f64]) -> Result<String, qsr_core::QsrError>,
+) -> Result<()> {
     let stdin = std::io::stdin();
     let mut labels = String::new();
     for (i, line) in stdin.lock().lines().enumerate() {
@@ -248,13 +350,10 @@ fn classify(out: &mut impl Write, c: &Calculus) -> Result<()> {
             .map(str::parse::<f64>)
             .collect::<Result<_, _>>()
             .with_context(|| format!("line {lineno}: `{text}` is not a list of numbers"))?;
-        let s = c
-            .classify_row(&row)
-            .with_context(|| format!("line {lineno}: `{text}`"))?;
-        labels.push_str(c.label(s));
+        let label = label_of(&row).with_context(|| format!("line {lineno}: `{text}`"))?;
+        labels.push_str(&label);
         labels.push('\n');
     }
-    // Printed only once every line classified: a bad line leaves no partial output.
     out.write_all(labels.as_bytes())?;
     Ok(())
 }

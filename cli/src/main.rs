@@ -7,6 +7,7 @@
 //! error once, at the top, with its chain).
 
 mod args;
+mod binary_cmd;
 mod calculus_cmd;
 mod demo_cmd;
 mod field_cmd;
@@ -39,9 +40,18 @@ fn main() -> ExitCode {
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
+        // The reader went away (`qrm ... | head`): what it wanted was written; not an error.
+        Err(e) if is_broken_pipe(&e) => ExitCode::SUCCESS,
         Err(e) => {
             eprintln!("error: {e:#}");
             ExitCode::FAILURE
         }
     }
+}
+
+fn is_broken_pipe(e: &anyhow::Error) -> bool {
+    e.chain().any(|c| {
+        c.downcast_ref::<std::io::Error>()
+            .is_some_and(|io| io.kind() == std::io::ErrorKind::BrokenPipe)
+    })
 }

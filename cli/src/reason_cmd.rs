@@ -6,6 +6,7 @@ use std::path::PathBuf;
 use anyhow::{Context, Result, bail};
 use pqrm::reason::{Fusion, InferOptions, Inferrer};
 use qsr_core::Calculus;
+use qsr_core::binary::{BinaryCalculus, BinaryNetwork, close_binary, is_binary_name};
 use qsr_core::reason::{
     Algebra, Network, ScenarioOptions, ScenarioOutcome, TableScope, close, find_scenario,
 };
@@ -155,7 +156,8 @@ fn parse_set(s: &str) -> std::result::Result<[u32; 3], String> {
 /// Where a network comes from and how it is read.
 #[derive(Debug, clap::Args)]
 pub struct NetworkArgs {
-    /// Calculus name or spec file (ternary point calculi).
+    /// Calculus name or spec file (ternary point calculi), or a binary calculus (opra-M,
+    /// star-m) for `close`.
     #[arg(long)]
     pub calculus: String,
     /// The network file (default: stdin).
@@ -195,9 +197,8 @@ struct Loaded {
     algebra: Algebra,
 }
 
-fn load(args: &NetworkArgs) -> Result<Loaded> {
-    let calculus = Calculus::resolve(&args.calculus)
-        .with_context(|| format!("loading calculus `{}`", args.calculus))?;
+/// The network's text and where it came from, and its form.
+fn read_network(args: &NetworkArgs) -> Result<(String, String, NetworkFormat)> {
     let (origin, text) = match &args.input {
         Some(path) => (
             path.display().to_string(),
@@ -223,6 +224,49 @@ fn load(args: &NetworkArgs) -> Result<Loaded> {
             None => bail!("{origin}: empty input, expected a constraint network"),
         },
     };
+    Ok((origin, text, format))
+}
+
+/// `qrm reason close` over a binary calculus (opra-M, star-m): path consistency with the
+/// exact tables.
+fn close_binary_network(args: &NetworkArgs) -> Result<()> {
+    if args.general_position {
+        bail!(
+            "--general-position is for ternary calculi; `{}`'s tables are exact",
+            args.calculus
+        );
+    }
+    let calculus = BinaryCalculus::builtin(&args.calculus)
+        .with_context(|| format!("loading calculus `{}`", args.calculus))?;
+    let (origin, text, format) = read_network(args)?;
+    let network = match format {
+        NetworkFormat::Json => BinaryNetwork::from_json_str(&calculus, &text),
+        NetworkFormat::Sparq => BinaryNetwork::from_sparq_str(&calculus, &text),
+    }
+    .with_context(|| format!("reading the network from {origin}"))?;
+    let closed = close_binary(network);
+    if let Some(why) = closed.describe() {
+        eprintln!("inconsistent: {why}");
+    }
+    let out = json!({
+        "consistent": closed.is_consistent(),
+        "constraints": closed.network.constraints_json(),
+    });
+    println!("{out}");
+    Ok(())
+}
+
+fn load(args: &NetworkArgs) -> Result<Loaded> {
+    if is_binary_name(&args.calculus) {
+        bail!(
+            "`{}` is binary: `qrm reason close` runs on binary networks; scenarios are \
+             searched over ternary ones",
+            args.calculus
+        );
+    }
+    let calculus = Calculus::resolve(&args.calculus)
+        .with_context(|| format!("loading calculus `{}`", args.calculus))?;
+    let (origin, text, format) = read_network(args)?;
     let network = match format {
         NetworkFormat::Json => Network::from_json_str(&calculus, &text),
         NetworkFormat::Sparq => Network::from_sparq_str(&calculus, &text),
@@ -240,6 +284,7 @@ fn load(args: &NetworkArgs) -> Result<Loaded> {
 
 pub fn run(cmd: ReasonCmd) -> Result<()> {
     match cmd {
+        ReasonCmd::Close(args) if is_binary_name(&args.calculus) => close_binary_network(&args),
         ReasonCmd::Close(args) => {
             let Loaded { network, algebra } = load(&args)?;
             let closed = close(network, &algebra)?;

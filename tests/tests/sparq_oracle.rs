@@ -27,73 +27,7 @@ use qsr_core::{Calculus, ComposeOptions, Permutation, StateId};
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
-#[derive(Debug, Clone)]
-enum Sexp {
-    Atom(String),
-    List(Vec<Sexp>),
-}
-
-impl Sexp {
-    fn atom(&self) -> Option<&str> {
-        match self {
-            Self::Atom(a) => Some(a),
-            Self::List(_) => None,
-        }
-    }
-    fn list(&self) -> &[Sexp] {
-        match self {
-            Self::List(l) => l,
-            Self::Atom(_) => &[],
-        }
-    }
-}
-
-fn parse(text: &str) -> Vec<Sexp> {
-    let mut tokens = Vec::new();
-    let mut cur = String::new();
-    let mut chars = text.chars().peekable();
-    while let Some(c) = chars.next() {
-        match c {
-            ';' => {
-                for d in chars.by_ref() {
-                    if d == '\n' {
-                        break;
-                    }
-                }
-            }
-            '(' | ')' => {
-                if !cur.is_empty() {
-                    tokens.push(std::mem::take(&mut cur));
-                }
-                tokens.push(c.to_string());
-            }
-            c if c.is_whitespace() => {
-                if !cur.is_empty() {
-                    tokens.push(std::mem::take(&mut cur));
-                }
-            }
-            c => cur.push(c),
-        }
-    }
-    let mut stack: Vec<Vec<Sexp>> = vec![Vec::new()];
-    for t in tokens {
-        match t.as_str() {
-            "(" => stack.push(Vec::new()),
-            ")" => {
-                let done = stack.pop().unwrap();
-                stack.last_mut().unwrap().push(Sexp::List(done));
-            }
-            _ => stack.last_mut().unwrap().push(Sexp::Atom(t.to_lowercase())),
-        }
-    }
-    stack.pop().unwrap()
-}
-
-/// The value following `key` in the `def-calculus` form.
-fn keyword<'a>(form: &'a [Sexp], key: &str) -> &'a Sexp {
-    let i = form.iter().position(|s| s.atom() == Some(key)).unwrap();
-    &form[i + 1]
-}
+use qrm_tests::sexp::{Sexp, keyword, parse};
 
 struct Sparq {
     names: Vec<String>,

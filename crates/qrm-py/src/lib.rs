@@ -10,6 +10,7 @@
 //! call becomes a Python `PanicException` (pyo3 catches it at the boundary), never a crash.
 #![allow(unsafe_code)] // pyo3's #[pymodule]/#[pyclass]/#[pymethods] expand to unsafe FFI glue; this crate writes none itself.
 
+mod binary;
 mod calculus;
 mod errors;
 mod mapping;
@@ -26,6 +27,8 @@ use pyo3::prelude::*;
 fn _qrm(m: &Bound<'_, PyModule>) -> PyResult<()> {
     errors::register(m)?;
     m.add_class::<calculus::Calculus>()?;
+    m.add_class::<binary::BinaryCalculus>()?;
+    m.add_function(wrap_pyfunction!(binary::reason_close_binary, m)?)?;
     m.add_class::<mapping::Pqrm>()?;
     m.add_function(wrap_pyfunction!(mapping::read_observations, m)?)?;
     m.add_function(wrap_pyfunction!(mapping::single_observation, m)?)?;

@@ -128,17 +128,6 @@ fn star_spec(m: usize) -> CalculusSpec {
             }
         })
         .collect();
-    let names8 = [
-        "front",
-        "front-left",
-        "left",
-        "back-left",
-        "back",
-        "back-right",
-        "right",
-        "front-right",
-    ];
-    let names4 = ["front", "left", "back", "right"];
     let states = (0..m)
         .map(|j| {
             let theta = j as f64 * sector;
@@ -148,11 +137,7 @@ fn star_spec(m: usize) -> CalculusSpec {
                     if (phi - theta).sin() > 0.0 { '+' } else { '-' }
                 })
                 .collect::<String>();
-            let label = match m {
-                4 => names4[j].to_owned(),
-                8 => names8[j].to_owned(),
-                _ => format!("s{j}"),
-            };
+            let label = star_label(m, j);
             StateSpec {
                 label,
                 cells: vec![cells],
@@ -168,5 +153,25 @@ fn star_spec(m: usize) -> CalculusSpec {
         constraints,
         raster: None,
         states,
+    }
+}
+
+/// The name of sector `j` of `star-m`: compass words for m = 4 and 8, `s{j}` otherwise
+/// (shared by the oriented spec calculus and the binary STAR algebra).
+pub(crate) fn star_label(m: usize, j: usize) -> String {
+    const NAMES8: [&str; 8] = [
+        "front",
+        "front-left",
+        "left",
+        "back-left",
+        "back",
+        "back-right",
+        "right",
+        "front-right",
+    ];
+    match m {
+        4 => NAMES8[2 * j].to_owned(),
+        8 => NAMES8[j].to_owned(),
+        _ => format!("s{j}"),
     }
 }

@@ -202,6 +202,12 @@ impl ComposeTable {
         Ok(Self { table: rows })
     }
 
+    /// A table whose entries are already sorted, deduplicated and in range (built by this
+    /// crate's own derivations).
+    pub(crate) fn from_sorted_rows(rows: Vec<Vec<Vec<StateId>>>) -> Self {
+        Self { table: rows }
+    }
+
     /// The possible `{A,B:D}` for `{A,B:C} = r`, `{B,C:D} = s` (sorted).
     #[must_use]
     pub fn get(&self, r: StateId, s: StateId) -> &[StateId] {

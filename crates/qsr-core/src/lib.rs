@@ -26,7 +26,8 @@
 //! - `merge_*` goes from a finer calculus to a coarser one ([`Calculus::merge_map`],
 //!   [`MergeMap::merge_distribution`]).
 //! - `from_*` / `to_*` convert specs and frames.
-//! - Reasoning over constraint networks (closure, scenarios) lives in [`reason`].
+//! - Reasoning over constraint networks (closure, scenarios) lives in [`reason`]; binary
+//!   calculi (OPRA-m, STAR-m) with exact converse and composition in [`binary`].
 //!
 //! ## Conventions
 //! Normalised ternary frame: A = (0, 0), B = (0, 1), **x < 0 is left** of A→B (a proper
@@ -41,7 +42,7 @@
 //! | `DegenerateFrame` | coincident reference points (see [`DEGENERATE_TOLERANCE`]), zero-length or opposed walls |
 //! | `Spec` | malformed spec, duplicate label, bad pattern, overlap, gap, unreachable state, bad raster |
 //! | `UnknownCalculus`, `UnknownState`, `UnknownOperation` | names that do not exist |
-//! | `Unsupported` | permutations/composition of non-ternary calculi |
+//! | `Unsupported` | permutations/composition of non-ternary spec calculi (binary ones: [`binary`]) |
 //! | `Arity` | wrong number of inputs, wrong frame kind, mismatched lengths |
 //! | `NotARefinement` | merging into a calculus that is not coarser |
 //! | `Network` | malformed constraint network (JSON or SparQ text), with line/column or constraint position |
@@ -62,6 +63,7 @@
 //! # Ok::<(), qsr_core::QsrError>(())
 //! ```
 
+pub mod binary;
 mod builtin;
 mod calculus;
 mod compose;

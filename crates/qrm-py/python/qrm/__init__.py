@@ -1,6 +1,6 @@
 """qrm — qualitative relational maps for robots.
 
-Calculi (`Calculus`), probabilistic qualitative relational mapping (`Pqrm`), observation
+Calculi (`Calculus`; binary OPRA-m and STAR-m with exact tables: `BinaryCalculus`), probabilistic qualitative relational mapping (`Pqrm`), observation
 files (`read_observations`) and the thesis's Monte Carlo study, sharded for distributed runs
 (`monte_carlo_config`, `monte_carlo_shard`, `monte_carlo_aggregate`, `monte_carlo`); salient
 region maps and learned calculi (`serge`, `SalientRegionMap`, `compose_cells`,
@@ -18,6 +18,7 @@ import json
 from typing import Any, Dict, List, Mapping, Optional, Sequence, Tuple, Union
 
 from ._qrm import (
+    BinaryCalculus,
     Calculus,
     DegenerateFrame,
     FormatError,
@@ -38,6 +39,7 @@ from ._qrm import (
 from . import _qrm, reason, sim
 
 __all__ = [
+    "BinaryCalculus",
     "Calculus",
     "DegenerateFrame",
     "FormatError",

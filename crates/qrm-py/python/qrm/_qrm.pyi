@@ -14,6 +14,7 @@ __all__ = [
     "FormatError",
     "IoError",
     "Calculus",
+    "BinaryCalculus",
     "Pqrm",
     "read_observations",
     "single_observation",
@@ -32,6 +33,7 @@ __all__ = [
     "worker_threads",
     "reason_close",
     "reason_scenario",
+    "reason_close_binary",
     "__version__",
 ]
 
@@ -61,6 +63,9 @@ def reason_close(calculus: Calculus, network: str, *, general_position: bool = F
 def reason_scenario(
     calculus: Calculus, network: str, *, general_position: bool = False, max_nodes: int = 100000
 ) -> str: ...
+def reason_close_binary(
+    calculus: BinaryCalculus, constraints: List[Tuple[str, str, List[str]]]
+) -> str: ...
 def worker_threads() -> int:
     """Worker threads of this process's (fork-safe) thread pool."""
 
@@ -89,6 +94,23 @@ class Calculus:
     def permute(self, op: str, *, generic: bool = False) -> Dict[str, List[str]]: ...
     def merge_map(self, coarse: Calculus) -> npt.NDArray[np.int64]: ...
     def spec_toml(self) -> str: ...
+    def render_svg(self, *, width: int = 640) -> str: ...
+
+@final
+class BinaryCalculus:
+    """A binary point calculus (opra-M, star-m) with exact converse and composition."""
+    @staticmethod
+    def builtin(name: str) -> BinaryCalculus: ...
+    @property
+    def name(self) -> str: ...
+    @property
+    def labels(self) -> List[str]: ...
+    @property
+    def n_states(self) -> int: ...
+    def classify(self, points: npt.NDArray[np.float64]) -> npt.NDArray[np.int64]: ...
+    def compose(self) -> Dict[str, Dict[str, List[str]]]: ...
+    def converse(self) -> Dict[str, List[str]]: ...
+    def neighbours(self) -> Dict[str, object]: ...
     def render_svg(self, *, width: int = 640) -> str: ...
 
 @final

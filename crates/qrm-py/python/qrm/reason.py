@@ -9,6 +9,13 @@ the labels. Points are names (strings); labels are the calculus's.
 >>> r.consistent, r.constraints[("A", "B", "D")]
 (True, ['left-front', 'left-middle', 'left-back'])
 
+Binary calculi (OPRA-m, STAR-m) close networks of pairs ``(A, B, [labels])``:
+
+>>> opra = qrm.BinaryCalculus.builtin("opra-1")
+>>> r = qrm.reason.close_binary(opra, [("A", "B", ["0_0"]), ("B", "C", ["0_0"])])
+>>> r.consistent, r.constraints[("A", "C")]
+(True, ['0_2', '2_0', 's_0'])
+
 Probabilistic reasoning over maps lives on the map: ``Pqrm.infer`` and ``Pqrm.check``.
 """
 from __future__ import annotations
@@ -18,11 +25,12 @@ from dataclasses import dataclass
 from typing import Dict, Iterable, List, Optional, Sequence, Tuple
 
 from . import _qrm
-from ._qrm import Calculus
+from ._qrm import BinaryCalculus, Calculus
 
-__all__ = ["Closure", "Triplet", "close", "scenario"]
+__all__ = ["BinaryClosure", "Closure", "Pair", "Triplet", "close", "close_binary", "scenario"]
 
 Triplet = Tuple[str, str, str]
+Pair = Tuple[str, str]
 
 
 @dataclass(frozen=True)
@@ -86,3 +94,28 @@ def scenario(
         )
     )
     return Closure(out["consistent"], _triplets(out["constraints"]))
+
+
+@dataclass(frozen=True)
+class BinaryClosure:
+    """The result of `close_binary`."""
+
+    consistent: bool
+    """False when closure emptied a relation."""
+    constraints: Dict[Pair, List[str]]
+    """Every pair ``(A, B)`` listed with ``A`` before ``B`` whose relation is not universal."""
+    explanation: Optional[str] = None
+    """Which three points could not agree, when inconsistent."""
+
+
+def close_binary(
+    calculus: BinaryCalculus, constraints: Iterable[Tuple[str, str, Sequence[str]]]
+) -> BinaryClosure:
+    """Algebraic closure (path consistency) of a binary network with the calculus's exact
+    tables; ``(A, B, labels)`` says the relation of B as seen from A is one of ``labels``."""
+    rows = [(str(a), str(b), [str(x) for x in labels]) for a, b, labels in constraints]
+    out = json.loads(_qrm.reason_close_binary(calculus, rows))
+    pairs: Dict[Pair, List[str]] = {
+        (str(a), str(b)): [str(x) for x in labels] for a, b, labels in out["constraints"]
+    }
+    return BinaryClosure(out["consistent"], pairs, out["explanation"])

@@ -46,7 +46,7 @@
 
 mod algebra;
 mod closure;
-mod network;
+pub(crate) mod network;
 mod scenario;
 mod state_set;
 

@@ -574,31 +574,31 @@ pub(crate) fn ordered_triplets(n: usize) -> impl Iterator<Item = (usize, usize, 
 
 /// A minimal s-expression reader for SparQ's network syntax (symbols and lists; `;`
 /// comments).
-mod sexpr {
+pub(crate) mod sexpr {
     use super::network_error;
 
     #[derive(Debug)]
-    pub(super) struct Expr {
-        pub(super) line: usize,
-        pub(super) column: usize,
-        pub(super) kind: Kind,
+    pub(crate) struct Expr {
+        pub(crate) line: usize,
+        pub(crate) column: usize,
+        pub(crate) kind: Kind,
     }
 
     #[derive(Debug)]
-    pub(super) enum Kind {
+    pub(crate) enum Kind {
         Atom(String),
         List(Vec<Expr>),
     }
 
     impl Expr {
-        pub(super) fn as_list(&self) -> Option<&[Expr]> {
+        pub(crate) fn as_list(&self) -> Option<&[Expr]> {
             match &self.kind {
                 Kind::List(l) => Some(l),
                 Kind::Atom(_) => None,
             }
         }
 
-        pub(super) fn as_atom(&self) -> Option<&str> {
+        pub(crate) fn as_atom(&self) -> Option<&str> {
             match &self.kind {
                 Kind::Atom(a) => Some(a),
                 Kind::List(_) => None,
@@ -609,7 +609,7 @@ mod sexpr {
     /// The most nesting accepted (SparQ networks nest three deep).
     const MAX_DEPTH: usize = 64;
 
-    pub(super) fn parse(text: &str) -> crate::Result<Expr> {
+    pub(crate) fn parse(text: &str) -> crate::Result<Expr> {
         let mut chars = text.chars().peekable();
         let (mut line, mut column) = (1usize, 1usize);
         let mut stack: Vec<(usize, usize, Vec<Expr>)> = Vec::new();

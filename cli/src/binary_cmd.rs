@@ -1,0 +1,274 @@
+//! `qrm calculus ...` for binary calculi (OPRA-m, STAR-m): thin formatting over
+//! `qsr_core::binary`.
+
+use std::collections::BTreeMap;
+use std::io::Write;
+use std::path::PathBuf;
+use std::time::Instant;
+
+use anyhow::Result;
+use qsr_core::StateId;
+use qsr_core::binary::{BinaryCalculus, CacheOutcome, render_binary_svg};
+use serde_json::json;
+
+use crate::output::write_atomic;
+
+/// What to do with a binary calculus (stage two of argument parsing).
+pub enum BinaryJob {
+    Show { json: bool },
+    Classify,
+    Neighbours { json: bool },
+    Compose { format: TableFormat },
+    Converse { format: TableFormat },
+    Render { out: PathBuf, width: u32 },
+}
+
+/// How a table is printed.
+#[derive(Clone, Copy)]
+pub enum TableFormat {
+    Text,
+    Json,
+    Gqr,
+}
+
+impl TableFormat {
+    pub fn of(json: bool, gqr: bool) -> Self {
+        match (json, gqr) {
+            (true, _) => Self::Json,
+            (false, true) => Self::Gqr,
+            (false, false) => Self::Text,
+        }
+    }
+}
+
+/// Where derived tables are cached: `QRM_CACHE_DIR` (empty: no cache), else
+/// `$XDG_CACHE_HOME/qrm`, else `~/.cache/qrm`.
+fn cache_dir() -> Option<PathBuf> {
+    if let Some(dir) = std::env::var_os("QRM_CACHE_DIR") {
+        return (!dir.is_empty()).then(|| PathBuf::from(dir));
+    }
+    if let Some(x) = std::env::var_os("XDG_CACHE_HOME").filter(|x| !x.is_empty()) {
+        return Some(PathBuf::from(x).join("qrm"));
+    }
+    std::env::var_os("HOME")
+        .filter(|h| !h.is_empty())
+        .map(|h| PathBuf::from(h).join(".cache").join("qrm"))
+}
+
+/// Loads or derives the tables, saying on stderr where they came from and how long it took.
+fn tables(c: &BinaryCalculus) -> Result<()> {
+    let start = Instant::now();
+    let outcome = match cache_dir() {
+        Some(dir) => c.load_or_derive_tables(&dir)?,
+        None => {
+            let _ = c.compose_table();
+            CacheOutcome::Derived("no cache directory".into())
+        }
+    };
+    let secs = start.elapsed().as_secs_f64();
+    match outcome {
+        CacheOutcome::InMemory => {}
+        CacheOutcome::Loaded(p) => eprintln!(
+            "{}: tables read from {} in {secs:.2} s",
+            c.name(),
+            p.display()
+        ),
+        CacheOutcome::Written(p) => eprintln!(
+            "{}: tables derived in {secs:.2} s, cached in {}",
+            c.name(),
+            p.display()
+        ),
+        CacheOutcome::Derived(why) => {
+            eprintln!("{}: tables derived in {secs:.2} s ({why})", c.name())
+        }
+    }
+    Ok(())
+}
+
+fn labels_of(c: &BinaryCalculus, set: &[StateId]) -> Vec<String> {
+    set.iter().map(|s| c.label(*s).to_owned()).collect()
+}
+
+pub fn run(out: &mut impl Write, c: &BinaryCalculus, job: BinaryJob) -> Result<()> {
+    match job {
+        BinaryJob::Show { json } => show(out, c, json),
+        BinaryJob::Classify => classify(out, c),
+        BinaryJob::Neighbours { json } => neighbours(out, c, json),
+        BinaryJob::Compose { format } => compose(out, c, format),
+        BinaryJob::Converse { format } => converse(out, c, format),
+        BinaryJob::Render { out: path, width } => {
+            write_atomic(&path, render_binary_svg(c, width).as_bytes())?;
+            writeln!(out, "wrote {}", path.display())?;
+            Ok(())
+        }
+    }
+}
+
+fn show(out: &mut impl Write, c: &BinaryCalculus, json: bool) -> Result<()> {
+    if json {
+        let v = json!({
+            "name": c.name(),
+            "description": c.description(),
+            "frame": if c.is_oriented() { "binary-opra" } else { "binary-star" },
+            "arity": 2,
+            "input_len": c.input_len(),
+            "n_states": c.n_states(),
+            "sectors": c.partition().n_sectors(),
+            "states": c.states().map(|s| json!({"id": s.0, "label": c.label(s)})).collect::<Vec<_>>(),
+            "table_hash": format!("{:016x}", c.table_hash()),
+        });
+        writeln!(out, "{}", serde_json::to_string_pretty(&v)?)?;
+        return Ok(());
+    }
+    writeln!(out, "{} — {}", c.name(), c.description())?;
+    writeln!(
+        out,
+        "binary calculus, {} numbers per line for `classify`, {} sectors per point",
+        c.input_len(),
+        c.partition().n_sectors()
+    )?;
+    writeln!(out, "relations: {}", c.n_states())?;
+    for s in c.states() {
+        writeln!(out, "  {:>4}  {}", s.0, c.label(s))?;
+    }
+    writeln!(out, "table hash (disk cache key): {:016x}", c.table_hash())?;
+    Ok(())
+}
+
+fn classify(out: &mut impl Write, c: &BinaryCalculus) -> Result<()> {
+    crate::calculus_cmd::classify_stdin(out, |row| Ok(c.label(c.classify_row(row)?).to_owned()))
+}
+
+fn neighbours(out: &mut impl Write, c: &BinaryCalculus, json: bool) -> Result<()> {
+    let g = c.neighbours();
+    if json {
+        let v = json!({
+            "states": c.labels(),
+            "adjacent": g.edges().iter().map(|(a, b)| [c.label(*a), c.label(*b)]).collect::<Vec<_>>(),
+            "distance": g.distance_matrix(),
+            "diameter": g.diameter(),
+        });
+        writeln!(out, "{}", serde_json::to_string(&v)?)?;
+        return Ok(());
+    }
+    writeln!(
+        out,
+        "{}: {} relations, {} adjacent pairs, diameter {:?}",
+        c.name(),
+        c.n_states(),
+        g.edges().len(),
+        g.diameter()
+    )?;
+    for s in c.states() {
+        writeln!(
+            out,
+            "  {:<12} {}",
+            c.label(s),
+            labels_of(c, &g.neighbours_of(s)).join(" ")
+        )?;
+    }
+    Ok(())
+}
+
+fn compose(out: &mut impl Write, c: &BinaryCalculus, format: TableFormat) -> Result<()> {
+    tables(c)?;
+    let t = c.compose_table();
+    match format {
+        TableFormat::Json => {
+            let mut table = BTreeMap::new();
+            for r in c.states() {
+                let row: BTreeMap<String, Vec<String>> = c
+                    .states()
+                    .map(|s| (c.label(s).to_owned(), labels_of(c, t.get(r, s))))
+                    .collect();
+                table.insert(c.label(r).to_owned(), row);
+            }
+            writeln!(
+                out,
+                "{}",
+                serde_json::to_string(&json!({"states": c.labels(), "table": table}))?
+            )?;
+        }
+        TableFormat::Gqr => {
+            for r in c.states() {
+                for s in c.states() {
+                    let ts = labels_of(c, t.get(r, s));
+                    writeln!(
+                        out,
+                        "{} : {} :: ({} )",
+                        c.label(r),
+                        c.label(s),
+                        prefixed(&ts)
+                    )?;
+                }
+            }
+        }
+        TableFormat::Text => {
+            writeln!(
+                out,
+                "{}: {{A:B}} ∘ {{B:C}} → {{A:C}}, {} entries",
+                c.name(),
+                t.n_entries()
+            )?;
+            for r in c.states() {
+                for s in c.states() {
+                    writeln!(
+                        out,
+                        "  {} ∘ {} = {{{}}}",
+                        c.label(r),
+                        c.label(s),
+                        labels_of(c, t.get(r, s)).join(", ")
+                    )?;
+                }
+            }
+        }
+    }
+    Ok(())
+}
+
+/// GQR writes `( a b c )`: each label preceded by a space.
+fn prefixed(labels: &[String]) -> String {
+    labels.iter().map(|l| format!(" {l}")).collect()
+}
+
+fn converse(out: &mut impl Write, c: &BinaryCalculus, format: TableFormat) -> Result<()> {
+    tables(c)?;
+    let t = c.converse();
+    match format {
+        TableFormat::Json => {
+            let table: BTreeMap<String, Vec<String>> = c
+                .states()
+                .map(|r| (c.label(r).to_owned(), labels_of(c, t.get(r))))
+                .collect();
+            writeln!(
+                out,
+                "{}",
+                serde_json::to_string(
+                    &json!({"states": c.labels(), "op": "converse", "table": table})
+                )?
+            )?;
+        }
+        TableFormat::Gqr => {
+            for r in c.states() {
+                writeln!(
+                    out,
+                    "{} :: {}",
+                    c.label(r),
+                    labels_of(c, t.get(r)).join(" ")
+                )?;
+            }
+        }
+        TableFormat::Text => {
+            writeln!(out, "{}: converse (X r Y ⇒ Y conv(r) X)", c.name())?;
+            for r in c.states() {
+                writeln!(
+                    out,
+                    "  {:<12} → {{{}}}",
+                    c.label(r),
+                    labels_of(c, t.get(r)).join(", ")
+                )?;
+            }
+        }
+    }
+    Ok(())
+}

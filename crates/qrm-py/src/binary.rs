@@ -1,0 +1,150 @@
+//! `qrm.BinaryCalculus`: a thin wrapper of `qsr_core::binary` (OPRA-m, STAR-m), and the
+//! closure of binary networks.
+
+use std::collections::BTreeMap;
+
+use numpy::{IntoPyArray, PyArray1, PyReadonlyArray2};
+use pyo3::prelude::*;
+use qsr_core::StateId;
+use qsr_core::binary::{BinaryNetwork, close_binary};
+
+use crate::errors::{invalid, qsr};
+
+/// A binary point calculus (`opra-M`, `star-m`) with exact converse and composition.
+#[pyclass(module = "qrm", frozen, from_py_object)]
+#[derive(Clone)]
+pub(crate) struct BinaryCalculus {
+    pub(crate) inner: qsr_core::binary::BinaryCalculus,
+}
+
+fn labels(c: &qsr_core::binary::BinaryCalculus, set: &[StateId]) -> Vec<String> {
+    set.iter().map(|s| c.label(*s).to_owned()).collect()
+}
+
+#[pymethods]
+impl BinaryCalculus {
+    /// `opra-M` (1 ≤ M ≤ 8) or `star-m` (even m, 2 ≤ m ≤ 32).
+    #[staticmethod]
+    fn builtin(name: &str) -> PyResult<Self> {
+        Ok(Self {
+            inner: qsr_core::binary::BinaryCalculus::builtin(name).map_err(qsr)?,
+        })
+    }
+
+    #[getter]
+    fn name(&self) -> String {
+        self.inner.name().to_owned()
+    }
+
+    #[getter]
+    fn labels(&self) -> Vec<String> {
+        self.inner.labels().to_vec()
+    }
+
+    #[getter]
+    fn n_states(&self) -> usize {
+        self.inner.n_states()
+    }
+
+    /// Relation ids of an (n, k) float64 array: OPRA k = 6 `ax ay a_heading bx by
+    /// b_heading`, STAR k = 5 `ox oy reference bx by` (radians, counter-clockwise from +x).
+    fn classify<'py>(
+        &self,
+        py: Python<'py>,
+        points: PyReadonlyArray2<'py, f64>,
+    ) -> PyResult<Bound<'py, PyArray1<i64>>> {
+        let a = points.as_array();
+        let k = self.inner.input_len();
+        if a.ncols() != k {
+            return Err(invalid(format!(
+                "{} classifies rows of {k} numbers, the array has {} columns",
+                self.inner.name(),
+                a.ncols()
+            )));
+        }
+        let mut ids = Vec::with_capacity(a.nrows());
+        for (i, row) in a.rows().into_iter().enumerate() {
+            let row: Vec<f64> = row.iter().copied().collect();
+            let s = self
+                .inner
+                .classify_row(&row)
+                .map_err(|e| invalid(format!("row {i}: {e}")))?;
+            ids.push(i64::from(s.0));
+        }
+        Ok(ids.into_pyarray(py))
+    }
+
+    /// The composition table {r: {s: [t, ...]}} of {A:B} ∘ {B:C} → {A:C} (exact).
+    fn compose(&self, py: Python<'_>) -> BTreeMap<String, BTreeMap<String, Vec<String>>> {
+        let c = &self.inner;
+        let table = crate::pool::detach(py, || c.compose_table().clone());
+        c.states()
+            .map(|r| {
+                (
+                    c.label(r).to_owned(),
+                    c.states()
+                        .map(|s| (c.label(s).to_owned(), labels(c, table.get(r, s))))
+                        .collect(),
+                )
+            })
+            .collect()
+    }
+
+    /// The converse table {r: [t]}: X r Y ⇒ Y t X.
+    fn converse(&self, py: Python<'_>) -> BTreeMap<String, Vec<String>> {
+        let c = &self.inner;
+        let table = crate::pool::detach(py, || c.converse().clone());
+        c.states()
+            .map(|r| (c.label(r).to_owned(), labels(c, table.get(r))))
+            .collect()
+    }
+
+    /// Conceptual neighbours: {"states", "adjacent", "distance"}.
+    fn neighbours<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, pyo3::types::PyDict>> {
+        let c = &self.inner;
+        let g = crate::pool::detach(py, || c.neighbours().clone());
+        let d = pyo3::types::PyDict::new(py);
+        d.set_item("states", c.labels().to_vec())?;
+        let adjacent: Vec<(String, String)> = g
+            .edges()
+            .iter()
+            .map(|(a, b)| (c.label(*a).to_owned(), c.label(*b).to_owned()))
+            .collect();
+        d.set_item("adjacent", adjacent)?;
+        d.set_item("distance", g.distance_matrix().to_vec())?;
+        Ok(d)
+    }
+
+    /// The partition of directions as SVG text.
+    #[pyo3(signature = (*, width = 640))]
+    fn render_svg(&self, width: u32) -> String {
+        qsr_core::binary::render_binary_svg(&self.inner, width)
+    }
+
+    fn __repr__(&self) -> String {
+        format!(
+            "BinaryCalculus('{}', {} relations)",
+            self.inner.name(),
+            self.inner.n_states()
+        )
+    }
+}
+
+/// Algebraic closure of a binary network given as `[(A, B, [labels]), ...]`; returns JSON
+/// `{"consistent", "constraints", "explanation"}`.
+#[pyfunction]
+pub(crate) fn reason_close_binary(
+    py: Python<'_>,
+    calculus: &BinaryCalculus,
+    constraints: Vec<(String, String, Vec<String>)>,
+) -> PyResult<String> {
+    let c = &calculus.inner;
+    let net = BinaryNetwork::from_constraints(c, &constraints).map_err(qsr)?;
+    let closed = crate::pool::detach(py, || close_binary(net));
+    Ok(serde_json::json!({
+        "consistent": closed.is_consistent(),
+        "constraints": closed.network.constraints_json(),
+        "explanation": closed.describe(),
+    })
+    .to_string())
+}

@@ -1,0 +1,126 @@
+//! The on-disk cache of derived binary tables, keyed by the calculus's hash.
+//!
+//! Deriving OPRA-4's 73,984 composition entries takes about a second on two cores; finer
+//! granularities take longer, and a reasoning session reloads the same tables many times.
+//! The cache stores converse and composition as JSON under
+//! `<dir>/<name>-<hash>.json`. The hash covers everything that determines the tables
+//! ([`BinaryCalculus::definition`]), so a changed derivation gets a new file, never a stale one;
+//! a file that fails to parse or does not match is derived again and replaced.
+
+use std::path::{Path, PathBuf};
+
+use serde::{Deserialize, Serialize};
+
+use super::calculus::BinaryCalculus;
+use super::derive::{self, BinaryTables, ConverseTable};
+use super::direction::TICKS_PER_UNIT;
+use crate::calculus::StateId;
+use crate::compose::ComposeTable;
+
+/// What [`BinaryCalculus::load_or_derive_tables`] did.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum CacheOutcome {
+    /// The tables were already in memory.
+    InMemory,
+    /// Read from this file.
+    Loaded(PathBuf),
+    /// Derived and written to this file.
+    Written(PathBuf),
+    /// Derived; the cache file could not be used (why).
+    Derived(String),
+}
+
+/// FNV-1a, 64 bit: stable across Rust versions and platforms (unlike `DefaultHasher`).
+#[must_use]
+pub(crate) fn fnv1a(bytes: &[u8]) -> u64 {
+    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+    for b in bytes {
+        h ^= u64::from(*b);
+        h = h.wrapping_mul(0x0100_0000_01b3);
+    }
+    h
+}
+
+#[derive(Serialize, Deserialize)]
+struct CacheFile {
+    format: String,
+    definition: String,
+    labels: Vec<String>,
+    converse: Vec<Vec<u16>>,
+    compose: Vec<Vec<Vec<u16>>>,
+}
+
+const FORMAT: &str = "qrm-binary-tables";
+
+/// The cache file of `c` in `dir`.
+#[must_use]
+pub fn cache_path(c: &BinaryCalculus, dir: &Path) -> PathBuf {
+    dir.join(format!("{}-{:016x}.json", c.name(), c.table_hash()))
+}
+
+pub(crate) fn load_or_derive(c: &BinaryCalculus, dir: &Path) -> (BinaryTables, CacheOutcome) {
+    let path = cache_path(c, dir);
+    let reason = match std::fs::read(&path) {
+        Ok(bytes) => match read(c, &bytes) {
+            Ok(t) => return (t, CacheOutcome::Loaded(path)),
+            Err(why) => format!("{} was unusable ({why}); derived again", path.display()),
+        },
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => String::new(),
+        Err(e) => format!("cannot read {}: {e}", path.display()),
+    };
+    let tables = derive::derive_tables(c, TICKS_PER_UNIT);
+    match write(c, &tables, &path) {
+        Ok(()) if reason.is_empty() => (tables, CacheOutcome::Written(path)),
+        Ok(()) => (tables, CacheOutcome::Derived(reason)),
+        Err(e) => (
+            tables,
+            CacheOutcome::Derived(format!("cannot write {}: {e}", path.display())),
+        ),
+    }
+}
+
+fn read(c: &BinaryCalculus, bytes: &[u8]) -> Result<BinaryTables, String> {
+    let f: CacheFile = serde_json::from_slice(bytes).map_err(|e| e.to_string())?;
+    if f.format != FORMAT || f.definition != c.definition() || f.labels != c.labels() {
+        return Err("written for another calculus or derivation".into());
+    }
+    let n = c.n_states();
+    if f.converse.len() != n || f.compose.len() != n {
+        return Err(format!("tables are not {n} × {n}"));
+    }
+    let ids = |v: Vec<u16>| v.into_iter().map(StateId).collect::<Vec<_>>();
+    let converse = ConverseTable::from_rows(f.converse.into_iter().map(ids).collect())
+        .map_err(|e| e.to_string())?;
+    let compose = ComposeTable::from_rows(
+        f.compose
+            .into_iter()
+            .map(|row| row.into_iter().map(ids).collect())
+            .collect(),
+    )
+    .map_err(|e| e.to_string())?;
+    Ok(BinaryTables { converse, compose })
+}
+
+fn write(c: &BinaryCalculus, t: &BinaryTables, path: &Path) -> std::io::Result<()> {
+    let ids = |v: &[StateId]| v.iter().map(|s| s.0).collect::<Vec<_>>();
+    let file = CacheFile {
+        format: FORMAT.into(),
+        definition: c.definition(),
+        labels: c.labels().to_vec(),
+        converse: t.converse.rows().iter().map(|r| ids(r)).collect(),
+        compose: c
+            .states()
+            .map(|r| c.states().map(|s| ids(t.compose.get(r, s))).collect())
+            .collect(),
+    };
+    let text = serde_json::to_vec(&file).map_err(std::io::Error::other)?;
+    if let Some(parent) = path.parent() {
+        std::fs::create_dir_all(parent)?;
+    }
+    // Write beside, then rename: a reader never sees half a file.
+    let tmp = path.with_extension(format!("json.tmp{}", std::process::id()));
+    std::fs::write(&tmp, text)?;
+    std::fs::rename(&tmp, path).inspect_err(|_| {
+        let _ = std::fs::remove_file(&tmp);
+    })
+}
