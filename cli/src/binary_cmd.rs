@@ -61,7 +61,7 @@ fn tables(c: &BinaryCalculus) -> Result<()> {
     let outcome = match cache_dir() {
         Some(dir) => c.load_or_derive_tables(&dir)?,
         None => {
-            let _ = c.compose_table();
+            c.compose_table()?;
             CacheOutcome::Derived("no cache directory".into())
         }
     };
@@ -140,7 +140,7 @@ fn classify(out: &mut impl Write, c: &BinaryCalculus) -> Result<()> {
 }
 
 fn neighbours(out: &mut impl Write, c: &BinaryCalculus, json: bool) -> Result<()> {
-    let g = c.neighbours();
+    let g = c.neighbours()?;
     if json {
         let v = json!({
             "states": c.labels(),
@@ -172,7 +172,7 @@ fn neighbours(out: &mut impl Write, c: &BinaryCalculus, json: bool) -> Result<()
 
 fn compose(out: &mut impl Write, c: &BinaryCalculus, format: TableFormat) -> Result<()> {
     tables(c)?;
-    let t = c.compose_table();
+    let t = c.compose_table()?;
     match format {
         TableFormat::Json => {
             let mut table = BTreeMap::new();
@@ -232,7 +232,6 @@ fn prefixed(labels: &[String]) -> String {
 }
 
 fn converse(out: &mut impl Write, c: &BinaryCalculus, format: TableFormat) -> Result<()> {
-    tables(c)?;
     let t = c.converse();
     match format {
         TableFormat::Json => {

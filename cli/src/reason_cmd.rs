@@ -244,7 +244,7 @@ fn close_binary_network(args: &NetworkArgs) -> Result<()> {
         NetworkFormat::Sparq => BinaryNetwork::from_sparq_str(&calculus, &text),
     }
     .with_context(|| format!("reading the network from {origin}"))?;
-    let closed = close_binary(network);
+    let closed = close_binary(network)?;
     if let Some(why) = closed.describe() {
         eprintln!("inconsistent: {why}");
     }

@@ -152,6 +152,7 @@ fn wrong_operations_say_what_would_work() {
         ),
         (&["calculus", "spec", "opra-2"], "not a spec file"),
         (&["calculus", "show", "opra-99"], "opra-M"),
+        (&["calculus", "compose", "opra-11"], "too large"),
     ] {
         let o = qrm(args, "");
         assert!(!o.status.success(), "{args:?} should fail");

@@ -23,7 +23,7 @@ fn labels(c: &qsr_core::binary::BinaryCalculus, set: &[StateId]) -> Vec<String> 
 
 #[pymethods]
 impl BinaryCalculus {
-    /// `opra-M` (1 ≤ M ≤ 8) or `star-m` (even m, 2 ≤ m ≤ 32).
+    /// `opra-M` (1 ≤ M ≤ 63; composition up to OPRA-10) or `star-m` (even m, 2 ≤ m ≤ 32).
     #[staticmethod]
     fn builtin(name: &str) -> PyResult<Self> {
         Ok(Self {
@@ -75,10 +75,10 @@ impl BinaryCalculus {
     }
 
     /// The composition table {r: {s: [t, ...]}} of {A:B} ∘ {B:C} → {A:C} (exact).
-    fn compose(&self, py: Python<'_>) -> BTreeMap<String, BTreeMap<String, Vec<String>>> {
+    fn compose(&self, py: Python<'_>) -> PyResult<BTreeMap<String, BTreeMap<String, Vec<String>>>> {
         let c = &self.inner;
-        let table = crate::pool::detach(py, || c.compose_table().clone());
-        c.states()
+        let table = crate::pool::detach(py, || c.compose_table().cloned()).map_err(qsr)?;
+        Ok(c.states()
             .map(|r| {
                 (
                     c.label(r).to_owned(),
@@ -87,7 +87,7 @@ impl BinaryCalculus {
                         .collect(),
                 )
             })
-            .collect()
+            .collect())
     }
 
     /// The converse table {r: [t]}: X r Y ⇒ Y t X.
@@ -102,7 +102,7 @@ impl BinaryCalculus {
     /// Conceptual neighbours: {"states", "adjacent", "distance"}.
     fn neighbours<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, pyo3::types::PyDict>> {
         let c = &self.inner;
-        let g = crate::pool::detach(py, || c.neighbours().clone());
+        let g = crate::pool::detach(py, || c.neighbours().cloned()).map_err(qsr)?;
         let d = pyo3::types::PyDict::new(py);
         d.set_item("states", c.labels().to_vec())?;
         let adjacent: Vec<(String, String)> = g
@@ -140,7 +140,7 @@ pub(crate) fn reason_close_binary(
 ) -> PyResult<String> {
     let c = &calculus.inner;
     let net = BinaryNetwork::from_constraints(c, &constraints).map_err(qsr)?;
-    let closed = crate::pool::detach(py, || close_binary(net));
+    let closed = crate::pool::detach(py, || close_binary(net)).map_err(qsr)?;
     Ok(serde_json::json!({
         "consistent": closed.is_consistent(),
         "constraints": closed.network.constraints_json(),

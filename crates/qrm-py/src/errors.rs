@@ -114,7 +114,9 @@ pub(crate) fn qsr(e: QsrError) -> PyErr {
     let msg = e.to_string();
     match e {
         QsrError::DegenerateFrame { .. } => DegenerateFrame::new_err(msg),
-        QsrError::NonFinite { .. } | QsrError::Arity(_) => InvalidInput::new_err(msg),
+        QsrError::NonFinite { .. } | QsrError::Arity(_) | QsrError::TooLarge { .. } => {
+            InvalidInput::new_err(msg)
+        }
         QsrError::Spec { .. }
         | QsrError::UnknownCalculus { .. }
         | QsrError::UnknownState { .. }

@@ -550,12 +550,21 @@ impl Calculus {
             Err(QsrError::Unsupported {
                 operation: operation.to_owned(),
                 calculus: self.name().to_owned(),
-                reason: format!(
-                    "permutations and composition are defined for ternary point calculi; a {} \
-                     relation does not record what they need (e.g. the heading of the middle \
-                     object)",
-                    self.frame().as_str()
-                ),
+                reason: if crate::binary::is_binary_name(self.name()) {
+                    format!(
+                        "this is the oriented spec view of `{0}`; its converse and composition \
+                         (STAR, a reference direction shared by all points) are in \
+                         `qsr_core::binary::BinaryCalculus::builtin(\"{0}\")`",
+                        self.name()
+                    )
+                } else {
+                    format!(
+                        "permutations and composition are defined for ternary point calculi \
+                         and, through `qsr_core::binary`, for OPRA-m and STAR-m; a {} relation \
+                         does not record what they need (e.g. the heading of the middle object)",
+                        self.frame().as_str()
+                    )
+                },
             })
         }
     }

@@ -64,6 +64,17 @@ pub enum QsrError {
         /// Why it is not defined.
         reason: String,
     },
+    /// The operation is defined but would need more memory or work than allowed; the
+    /// reason carries the estimate and the limit.
+    #[error("`{operation}` of calculus `{calculus}` is too large: {reason}")]
+    TooLarge {
+        /// The operation asked for.
+        operation: String,
+        /// Name of the calculus.
+        calculus: String,
+        /// The estimate against the limit.
+        reason: String,
+    },
     /// The input has the wrong shape for the calculus (e.g. 5 numbers for a ternary calculus).
     #[error("arity mismatch: {0}")]
     Arity(String),

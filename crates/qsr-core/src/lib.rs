@@ -43,6 +43,7 @@
 //! | `Spec` | malformed spec, duplicate label, bad pattern, overlap, gap, unreachable state, bad raster |
 //! | `UnknownCalculus`, `UnknownState`, `UnknownOperation` | names that do not exist |
 //! | `Unsupported` | permutations/composition of non-ternary spec calculi (binary ones: [`binary`]) |
+//! | `TooLarge` | a derived table (e.g. OPRA-11 composition) beyond the memory or work limit, with the estimate |
 //! | `Arity` | wrong number of inputs, wrong frame kind, mismatched lengths |
 //! | `NotARefinement` | merging into a calculus that is not coarser |
 //! | `Network` | malformed constraint network (JSON or SparQ text), with line/column or constraint position |

@@ -42,7 +42,7 @@ fn a_grid_too_coarse_misses_compositions() {
     // unit cannot place a point strictly inside a sector, so it must lose entries.
     let c = BinaryCalculus::builtin("opra-1").unwrap();
     let (_, coarse) = c.derive_tables_with(1);
-    assert!(coarse.n_entries() < c.compose_table().n_entries());
+    assert!(coarse.n_entries() < c.compose_table().unwrap().n_entries());
 }
 
 type Config = [(Point2<f64>, f64); 3];
@@ -59,7 +59,7 @@ fn check_config(c: &BinaryCalculus, cfg: &Config) {
     let rel = |i: usize, j: usize| c.classify(cfg[i].0, cfg[i].1, cfg[j].0, cfg[j].1).unwrap();
     let (r, s, t) = (rel(0, 1), rel(1, 2), rel(0, 2));
     assert!(
-        c.compose_table().get(r, s).contains(&t),
+        c.compose_table().unwrap().get(r, s).contains(&t),
         "{}: {} ∘ {} lacks {} for {cfg:?}",
         c.name(),
         c.label(r),
@@ -145,8 +145,8 @@ fn converse_is_an_involution_and_identity_composes_neutrally() {
                 c.label(r)
             );
             if name != "opra-4" {
-                assert_eq!(c.compose_table().get(r, id), &[r]);
-                assert_eq!(c.compose_table().get(id, r), &[r]);
+                assert_eq!(c.compose_table().unwrap().get(r, id), &[r]);
+                assert_eq!(c.compose_table().unwrap().get(id, r), &[r]);
             }
         }
     }
@@ -166,7 +166,7 @@ fn opra_sizes_match_the_literature() {
 #[test]
 fn neighbours_follow_motion() {
     let c = BinaryCalculus::builtin("opra-1").unwrap();
-    let g = c.neighbours();
+    let g = c.neighbours().unwrap();
     let s = |l: &str| c.state(l).unwrap();
     // B straight ahead of A, A straight behind B: moving B onto A leaves B's heading = A's.
     assert!(g.is_adjacent(s("0_2"), s("s_0")));
@@ -178,7 +178,7 @@ fn neighbours_follow_motion() {
     assert!(!g.is_adjacent(s("0_2"), s("2_2")));
     assert!(g.diameter().is_some(), "connected");
     let star = BinaryCalculus::builtin("star-8").unwrap();
-    let sg = star.neighbours();
+    let sg = star.neighbours().unwrap();
     let t = |l: &str| star.state(l).unwrap();
     assert!(sg.is_adjacent(t("front"), t("front-left")));
     assert!(!sg.is_adjacent(t("front"), t("left")));
@@ -205,7 +205,7 @@ fn closure_keeps_the_truth_of_real_configurations() {
         let any = StateSet::universal(c.n_states());
         net.set(0, 3, &any);
         net.set(1, 4, &any);
-        let closed = close_binary(net);
+        let closed = close_binary(net).unwrap();
         assert!(closed.is_consistent());
         for (i, j) in [(0, 3), (1, 4), (3, 0)] {
             let inferred = closed.network.get(i, j);
@@ -220,7 +220,7 @@ fn closure_finds_a_contradiction_and_names_it() {
     let c = BinaryCalculus::builtin("opra-1").unwrap();
     // Facing each other in a row, but C both ahead of A and on A's left.
     let net = BinaryNetwork::from_sparq_str(&c, "((A 0_0 B) (B 0_0 C) (A (1_1 1_3) C))").unwrap();
-    let closed = close_binary(net);
+    let closed = close_binary(net).unwrap();
     assert!(!closed.is_consistent());
     let why = closed.describe().unwrap();
     assert!(why.contains('A') && why.contains('C'), "{why}");
@@ -284,4 +284,32 @@ fn binary_star_names_the_sectors_as_the_oriented_spec_calculus_does() {
             assert_eq!(a, b, "{name}: {o:?} yaw {yaw} → {p:?}");
         }
     }
+}
+
+#[test]
+fn any_opra_granularity_classifies_and_too_fine_tables_are_refused_with_the_estimate() {
+    // OPRA-63 is the finest a 16-bit relation id holds: classification and converse work.
+    let fine = BinaryCalculus::builtin("opra-63").unwrap();
+    assert_eq!(fine.n_states(), 16 * 63 * 63 + 4 * 63);
+    let r = fine
+        .classify(Point2::origin(), 0.0, Point2::new(1.0, 0.0), PI)
+        .unwrap();
+    assert_eq!(fine.label(r), "0_0");
+    assert_eq!(fine.converse().get(r), &[r]);
+    // Its composition would need hundreds of GiB: refused before anything is allocated.
+    let e = fine.compose_table().unwrap_err().to_string();
+    assert!(e.contains("GiB") && e.contains("limits"), "{e}");
+    assert!(fine.neighbours().unwrap_err().to_string().contains("GiB"));
+    assert!(
+        BinaryCalculus::builtin("opra-11")
+            .unwrap()
+            .compose_table()
+            .is_err()
+    );
+    assert!(
+        BinaryCalculus::builtin("opra-64").is_err(),
+        "ids are 16 bits"
+    );
+    let cost = BinaryCalculus::builtin("opra-10").unwrap().compose_cost();
+    assert!(cost.bytes <= qsr_core::binary::MAX_TABLE_BYTES);
 }

@@ -8,7 +8,7 @@ use std::sync::{Arc, Mutex, OnceLock};
 use nalgebra::Point2;
 
 use super::cache::{self, CacheOutcome};
-use super::derive::{self, BinaryTables, ConverseTable};
+use super::derive::{self, ConverseTable};
 use super::direction::{DirectionPartition, TICKS_PER_UNIT};
 use crate::calculus::StateId;
 use crate::compose::ComposeTable;
@@ -16,10 +16,16 @@ use crate::error::{QsrError, Result};
 use crate::frame::DEGENERATE_TOLERANCE;
 use crate::neighbours::NeighbourGraph;
 
-/// Largest OPRA granularity offered: OPRA-8 has 1,088 relations and 1.18 M composition
-/// entries (derived in about a minute on two cores); finer ones do not fit a composition
-/// table in memory comfortably.
-pub const MAX_OPRA_M: usize = 8;
+/// Largest OPRA granularity: OPRA-63 has 63,756 relations, the most a 16-bit relation id
+/// holds. Classification and converse work for all; composition and neighbours are refused
+/// beyond [`MAX_TABLE_BYTES`] / [`MAX_DERIVATION_STEPS`] with the estimate (OPRA-10 is the
+/// largest composition that fits).
+pub const MAX_OPRA_M: usize = 63;
+/// The most memory a derived table may take.
+pub const MAX_TABLE_BYTES: u64 = 4 << 30;
+/// The most grid steps a composition derivation may take (OPRA-4 takes 6.4 · 10⁷, about half
+/// a second on two cores; this bound is tens of minutes).
+pub const MAX_DERIVATION_STEPS: u64 = 200_000_000_000;
 /// The binary calculi `qrm calculus list` shows (any `opra-M` up to [`MAX_OPRA_M`] and every
 /// even `star-m` work; `star-4` and `star-8` are listed with the spec calculi).
 pub const BINARY_NAMES: [&str; 4] = ["opra-1", "opra-2", "opra-3", "opra-4"];
@@ -54,7 +60,7 @@ pub enum BinaryFamily {
 /// // A convoy: B straight ahead of A and A straight behind B, C likewise ahead of B ...
 /// let ahead = opra.state("0_2")?;
 /// // ... so C is straight ahead of A, A straight behind C.
-/// assert_eq!(opra.compose_table().get(ahead, ahead), &[ahead]);
+/// assert_eq!(opra.compose_table()?.get(ahead, ahead), &[ahead]);
 /// # Ok::<(), qsr_core::QsrError>(())
 /// ```
 #[derive(Debug, Clone)]
@@ -68,8 +74,18 @@ pub struct BinaryCalculus {
 
 #[derive(Debug, Default)]
 struct Derived {
-    tables: OnceLock<BinaryTables>,
+    converse: OnceLock<ConverseTable>,
+    compose: OnceLock<ComposeTable>,
     neighbours: OnceLock<NeighbourGraph>,
+}
+
+/// What deriving a table would take, estimated before starting.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct DerivationCost {
+    /// Peak bytes (per-thread bitset tables and the result).
+    pub bytes: u64,
+    /// Grid steps.
+    pub steps: u64,
 }
 
 fn cache() -> &'static Mutex<Vec<BinaryCalculus>> {
@@ -371,36 +387,77 @@ impl BinaryCalculus {
         cache::fnv1a(self.definition().as_bytes())
     }
 
-    fn tables(&self) -> &BinaryTables {
-        self.derived
-            .tables
-            .get_or_init(|| derive::derive_tables(self, TICKS_PER_UNIT))
+    /// What deriving the composition table takes (checked by [`BinaryCalculus::compose_table`]).
+    #[must_use]
+    pub fn compose_cost(&self) -> DerivationCost {
+        let n = self.n_states() as u64;
+        let words = n.div_ceil(64);
+        // A bitset table per part plus the merged one, and the result's list headers.
+        let tables = derive::PARTS as u64 + 1;
+        let bytes = n * n * (8 * words * tables + 24);
+        DerivationCost {
+            bytes,
+            steps: derive::compose_steps(self, TICKS_PER_UNIT),
+        }
+    }
+
+    fn check_compose(&self) -> Result<()> {
+        let cost = self.compose_cost();
+        if cost.bytes > MAX_TABLE_BYTES || cost.steps > MAX_DERIVATION_STEPS {
+            return Err(QsrError::TooLarge {
+                operation: "compose".into(),
+                calculus: self.name.clone(),
+                reason: format!(
+                    "its composition table needs about {:.1} GiB and {:.1e} grid steps; the \
+                     limits are {} GiB and {:.0e} (classification and converse work)",
+                    cost.bytes as f64 / f64::from(1u32 << 30),
+                    cost.steps as f64,
+                    MAX_TABLE_BYTES >> 30,
+                    MAX_DERIVATION_STEPS as f64
+                ),
+            });
+        }
+        Ok(())
     }
 
     /// The converse table: `X r Y ⇒ Y conv(r) X` (derived on first use, then cached).
     #[must_use]
     pub fn converse(&self) -> &ConverseTable {
-        &self.tables().converse
+        self.derived
+            .converse
+            .get_or_init(|| derive::derive_converse(self, TICKS_PER_UNIT))
     }
 
     /// The composition table `{A:B} ∘ {B:C} → {A:C}` (derived on first use, then cached).
-    #[must_use]
-    pub fn compose_table(&self) -> &ComposeTable {
-        &self.tables().compose
+    ///
+    /// # Errors
+    /// [`QsrError::TooLarge`] when the table would exceed [`MAX_TABLE_BYTES`] or
+    /// [`MAX_DERIVATION_STEPS`] (OPRA-11 and finer), with the estimate.
+    pub fn compose_table(&self) -> Result<&ComposeTable> {
+        if let Some(t) = self.derived.compose.get() {
+            return Ok(t);
+        }
+        self.check_compose()?;
+        Ok(self
+            .derived
+            .compose
+            .get_or_init(|| derive::derive_compose(self, TICKS_PER_UNIT)))
     }
 
     /// Loads the tables from `dir` when a file with this calculus's hash is there and
     /// intact, else derives them and writes the file (atomically). A cache that cannot be
-    /// written is not an error: the tables are returned and the outcome says why.
+    /// written is not an error: the tables are kept in memory and the outcome says why.
     ///
     /// # Errors
-    /// None today; the `Result` leaves room for a cache that must be honoured.
+    /// As [`BinaryCalculus::compose_table`] when the table is too large to derive.
     pub fn load_or_derive_tables(&self, dir: &Path) -> Result<CacheOutcome> {
-        if self.derived.tables.get().is_some() {
+        if self.derived.compose.get().is_some() {
             return Ok(CacheOutcome::InMemory);
         }
+        self.check_compose()?;
         let (tables, outcome) = cache::load_or_derive(self, dir);
-        let _ = self.derived.tables.set(tables);
+        let _ = self.derived.converse.set(tables.converse);
+        let _ = self.derived.compose.set(tables.compose);
         Ok(outcome)
     }
 
@@ -414,11 +471,32 @@ impl BinaryCalculus {
 
     /// The conceptual-neighbour graph: two relations are neighbours when a configuration of
     /// one is a limit of configurations of the other (a point moved, a heading turned).
-    #[must_use]
-    pub fn neighbours(&self) -> &NeighbourGraph {
-        self.derived
+    ///
+    /// # Errors
+    /// [`QsrError::TooLarge`] beyond [`MAX_TABLE_BYTES`]: the graph keeps an `n × n`
+    /// distance matrix (OPRA-32 and finer).
+    pub fn neighbours(&self) -> Result<&NeighbourGraph> {
+        if let Some(g) = self.derived.neighbours.get() {
+            return Ok(g);
+        }
+        let n = self.n_states() as u64;
+        // Adjacency (1 byte) and distances (8 bytes) per pair, and Dijkstra's maps.
+        let bytes = n * n * 24;
+        if bytes > MAX_TABLE_BYTES {
+            return Err(QsrError::TooLarge {
+                operation: "neighbours".into(),
+                calculus: self.name.clone(),
+                reason: format!(
+                    "its neighbour graph and distance matrix need about {:.1} GiB; the limit is {} GiB",
+                    bytes as f64 / f64::from(1u32 << 30),
+                    MAX_TABLE_BYTES >> 30
+                ),
+            });
+        }
+        Ok(self
+            .derived
             .neighbours
-            .get_or_init(|| derive::derive_neighbours(self, TICKS_PER_UNIT))
+            .get_or_init(|| derive::derive_neighbours(self, TICKS_PER_UNIT)))
     }
 }
 

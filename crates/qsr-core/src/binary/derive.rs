@@ -148,11 +148,33 @@ fn triangles(turn: usize) -> Vec<(usize, usize)> {
     out
 }
 
+/// Parts the composition's directions are split into, each with its own bitset table.
+pub(crate) const PARTS: usize = 4;
+
 /// Converse and composition of `c` on a grid of `per_unit` ticks per unit.
+pub(crate) fn derive_tables(c: &BinaryCalculus, per_unit: usize) -> BinaryTables {
+    BinaryTables {
+        converse: derive_converse(c, per_unit),
+        compose: derive_compose(c, per_unit),
+    }
+}
+
+/// Grid steps of the composition derivation (for the cost estimate): directions of A→B ×
+/// triangles × B's and C's headings, plus the coincidences.
+pub(crate) fn compose_steps(c: &BinaryCalculus, per_unit: usize) -> u64 {
+    let turn = 2 * c.partition().m() * per_unit;
+    let headings = if c.is_oriented() { turn as u64 } else { 1 };
+    let half = (turn / 2) as u64;
+    // Proper triangles: about half² per orientation; collinear ones are few.
+    let triangles = half * half + 3;
+    turn as u64 * (triangles + 3) * headings * headings
+}
+
+/// The composition of `c` on a grid of `per_unit` ticks per unit.
 ///
 /// Headings: A's is 0 (rotation invariance); B's and C's run over the grid for OPRA and are
 /// 0 for STAR (its reference direction is shared).
-pub(crate) fn derive_tables(c: &BinaryCalculus, per_unit: usize) -> BinaryTables {
+pub(crate) fn derive_compose(c: &BinaryCalculus, per_unit: usize) -> ComposeTable {
     let n = c.n_states();
     let turn = 2 * c.partition().m() * per_unit;
     let half = turn / 2;
@@ -161,12 +183,16 @@ pub(crate) fn derive_tables(c: &BinaryCalculus, per_unit: usize) -> BinaryTables
     let d = |dir: usize, hx: usize, hy: usize| c.relation_distinct(dir, hx, hy, per_unit);
     let same = |hx: usize, hy: usize| c.relation_same(hx, hy, per_unit);
 
-    // Distinct points, one direction of A→B per task (deterministic: OR is commutative).
-    let table = (0..turn)
-        .into_par_iter()
-        .fold(
-            || BitTable::new(n),
-            |mut t, alpha| {
+    // One table per part of a fixed split of the directions of A→B (so memory, and the
+    // estimate that may refuse the derivation, do not depend on the thread count), merged by
+    // OR: the result does not either.
+    let chunk = turn.div_ceil(PARTS);
+    let alphas: Vec<usize> = (0..turn).collect();
+    let mut table = alphas
+        .par_chunks(chunk)
+        .map(|chunk| {
+            let mut t = BitTable::new(n);
+            for &alpha in chunk {
                 for &(t1, t2) in &tri {
                     let beta = alpha + t1; // B→C
                     let gamma = beta + t2; // C→A
@@ -186,20 +212,28 @@ pub(crate) fn derive_tables(c: &BinaryCalculus, per_unit: usize) -> BinaryTables
                         t.set(d(alpha, 0, hb), d(alpha + half, hb, hc), same(0, hc));
                     }
                 }
-                t
-            },
-        )
+            }
+            t
+        })
         .reduce(|| BitTable::new(n), BitTable::merge);
-    let mut table = table;
     for hb in 0..headings {
         for hc in 0..headings {
             table.set(same(0, hb), same(hb, hc), same(0, hc));
         }
     }
-    let compose_rows: Vec<Vec<Vec<StateId>>> = (0..n)
+    let rows: Vec<Vec<Vec<StateId>>> = (0..n)
         .map(|r| (0..n).map(|s| table.entry(r, s)).collect())
         .collect();
+    ComposeTable::from_sorted_rows(rows)
+}
 
+/// The converse of `c`: every direction and heading of B on the grid, and coincidence.
+pub(crate) fn derive_converse(c: &BinaryCalculus, per_unit: usize) -> ConverseTable {
+    let n = c.n_states();
+    let turn = 2 * c.partition().m() * per_unit;
+    let half = turn / 2;
+    let headings = if c.is_oriented() { turn } else { 1 };
+    let d = |dir: usize, hx: usize, hy: usize| c.relation_distinct(dir, hx, hy, per_unit);
     let mut converse = vec![Vec::new(); n];
     for alpha in 0..turn {
         for hb in 0..headings {
@@ -207,16 +241,13 @@ pub(crate) fn derive_tables(c: &BinaryCalculus, per_unit: usize) -> BinaryTables
         }
     }
     for hb in 0..headings {
-        converse[same(0, hb)].push(state_id(same(hb, 0)));
+        converse[c.relation_same(0, hb, per_unit)].push(state_id(c.relation_same(hb, 0, per_unit)));
     }
     for row in &mut converse {
         row.sort_unstable();
         row.dedup();
     }
-    BinaryTables {
-        converse: ConverseTable { rows: converse },
-        compose: ComposeTable::from_sorted_rows(compose_rows),
-    }
+    ConverseTable { rows: converse }
 }
 
 /// Conceptual neighbours: relations whose configurations touch under a continuous motion.

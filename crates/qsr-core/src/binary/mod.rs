@@ -46,7 +46,8 @@ mod picture;
 
 pub use cache::{CacheOutcome, cache_path};
 pub use calculus::{
-    BINARY_NAMES, BinaryCalculus, BinaryFamily, MAX_OPRA_M, MAX_STAR_M, is_binary_name,
+    BINARY_NAMES, BinaryCalculus, BinaryFamily, DerivationCost, MAX_DERIVATION_STEPS, MAX_OPRA_M,
+    MAX_STAR_M, MAX_TABLE_BYTES, is_binary_name,
 };
 pub use derive::ConverseTable;
 pub use direction::{DirectionPartition, RAY_TOLERANCE, TICKS_PER_UNIT};

@@ -22,14 +22,14 @@ pub const MAX_BINARY_POINTS: usize = 4096;
 /// let opra = BinaryCalculus::builtin("opra-1")?;
 /// // A and B face each other; B also faces C, and C faces B.
 /// let net = BinaryNetwork::from_sparq_str(&opra, "((A 0_0 B) (B 0_0 C))")?;
-/// let closed = close_binary(net);
+/// let closed = close_binary(net)?;
 /// assert!(closed.is_consistent());
 /// // B faces both, so C lies on the ray from B through A: between A and B (C straight
 /// // ahead of A, A straight behind C), beyond A, or at A with A's heading.
 /// assert_eq!(closed.network.labels_of(0, 2), ["0_2", "2_0", "s_0"]);
 /// // Saying C is on A's left contradicts that.
 /// let bad = BinaryNetwork::from_sparq_str(&opra, "((A 0_0 B) (B 0_0 C) (A 1_1 C))")?;
-/// assert!(!close_binary(bad).is_consistent());
+/// assert!(!close_binary(bad)?.is_consistent());
 /// # Ok::<(), qsr_core::QsrError>(())
 /// ```
 #[derive(Debug, Clone, PartialEq)]
@@ -434,12 +434,14 @@ impl BinaryClosure {
 /// Algebraic closure (path consistency): repeat `R(i,k) ← R(i,k) ∩ R(i,j) ∘ R(j,k)` over
 /// every triple until nothing changes. Sound for every calculus whose composition table is
 /// sound — qsr-core's derived binary tables are exact.
-#[must_use]
-pub fn close_binary(network: BinaryNetwork) -> BinaryClosure {
+///
+/// # Errors
+/// As [`BinaryCalculus::compose_table`] (a calculus too fine to derive its table).
+pub fn close_binary(network: BinaryNetwork) -> crate::Result<BinaryClosure> {
     let c = network.calculus.clone();
     let n_states = c.n_states();
     let words = network.words;
-    let table = c.compose_table();
+    let table = c.compose_table()?;
     // compose[r][s] as words, and the compositions with a universal side.
     let mut bits = vec![0u64; n_states * n_states * words];
     for r in c.states() {
@@ -482,11 +484,11 @@ pub fn close_binary(network: BinaryNetwork) -> BinaryClosure {
                     revisions += 1;
                     net.replace_words(x, y, &new);
                     if new.iter().all(|w| *w == 0) {
-                        return BinaryClosure {
+                        return Ok(BinaryClosure {
                             network: net,
                             contradiction: Some((x, via, y)),
                             revisions,
-                        };
+                        });
                     }
                     for (p, q) in [(x, y), (y, x)] {
                         if !queued[p * n + q] {
@@ -498,11 +500,11 @@ pub fn close_binary(network: BinaryNetwork) -> BinaryClosure {
             }
         }
     }
-    BinaryClosure {
+    Ok(BinaryClosure {
         network: net,
         contradiction: None,
         revisions,
-    }
+    })
 }
 
 /// The relation set of given ids (ids beyond the calculus are ignored).
