@@ -329,6 +329,14 @@ fn classify(out: &mut impl Write, c: &Calculus) -> Result<()> {
     classify_stdin(out, |row| Ok(c.label(c.classify_row(row)?).to_owned()))
 }
 
+/// A line as quoted in an error: at most 60 characters (a 2 MB line is not echoed whole).
+fn shown(text: &str) -> String {
+    match text.char_indices().nth(60) {
+        None => text.to_owned(),
+        Some((cut, _)) => format!("{}… ({} bytes)", &text[..cut], text.len()),
+    }
+}
+
 /// Reads configurations from stdin, one per line (blank lines and `#` comments skipped), and
 /// prints one label per line — only once every line classified, so a bad line leaves no
 /// partial output.
@@ -349,8 +357,10 @@ pub fn classify_stdin(
             .split_whitespace()
             .map(str::parse::<f64>)
             .collect::<Result<_, _>>()
-            .with_context(|| format!("line {lineno}: `{text}` is not a list of numbers"))?;
-        let label = label_of(&row).with_context(|| format!("line {lineno}: `{text}`"))?;
+            .with_context(|| {
+                format!("line {lineno}: `{}` is not a list of numbers", shown(text))
+            })?;
+        let label = label_of(&row).with_context(|| format!("line {lineno}: `{}`", shown(text)))?;
         labels.push_str(&label);
         labels.push('\n');
     }

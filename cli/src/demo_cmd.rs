@@ -3,7 +3,7 @@
 //! navigate to a goal with Q-Link; write an MCAP log for Foxglove, a summary and a picture.
 
 use std::collections::BTreeMap;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use anyhow::{Context, Result, bail};
@@ -18,7 +18,7 @@ use serge::learn::{TripletObservation, triplet_beliefs};
 use serge::{CellMasses, Grid, Serge, SergeParams};
 
 use crate::mcap_log::{McapLog, stamp, yaw};
-use crate::output::write_atomic;
+use crate::output::{Staging, write_atomic};
 
 /// `qrm demo`.
 #[derive(Debug, clap::Args)]
@@ -231,12 +231,15 @@ pub fn run(a: DemoArgs) -> Result<()> {
     let outcome = nav.navigate(start, goal, None, true)?;
     let t_nav = t2.elapsed().as_secs_f64();
     // 5. outputs
-    std::fs::create_dir_all(&a.out).with_context(|| format!("creating {}", a.out.display()))?;
+    // Written into a staging directory, moved into place only when all is done: a
+    // failure or Ctrl-C leaves nothing a user could take for a result.
+    let stage = Staging::new(&a.out)?;
+    let out_dir = stage.path().to_path_buf();
     let t_end_map = frames.last().map_or(0.0, |f| f.t);
-    write_log(&a, &sc, &frames, &map, &outcome, goal, t_end_map)?;
+    write_log(&out_dir, &sc, &frames, &map, &outcome, goal, t_end_map)?;
     if let Some(c) = &learned {
         write_atomic(
-            &a.out.join("learned_calculus.json"),
+            &out_dir.join("learned_calculus.json"),
             c.spec().to_json_string()?.as_bytes(),
         )?;
     }
@@ -256,7 +259,7 @@ pub fn run(a: DemoArgs) -> Result<()> {
         .map(|w| ((w[0][0], w[0][1]), (w[1][0], w[1][1])))
         .collect();
     crate::plot::scenario_map(
-        &a.out.join("demo"),
+        &out_dir.join("demo"),
         &format!(
             "Q-Link to landmark {goal}: {} ({} transitions, {:.0} m)",
             if outcome.success { "reached" } else { "failed" },
@@ -287,7 +290,7 @@ pub fn run(a: DemoArgs) -> Result<()> {
         "seconds": {"simulate": t_sim, "serge": t_serge, "navigate": t_nav, "total": t0.elapsed().as_secs_f64()},
     });
     write_atomic(
-        &a.out.join("summary.json"),
+        &out_dir.join("summary.json"),
         serde_json::to_string_pretty(&summary)?.as_bytes(),
     )?;
     println!("qrm demo (seed {}):", a.seed);
@@ -321,11 +324,12 @@ pub fn run(a: DemoArgs) -> Result<()> {
         a.out.display(),
         t0.elapsed().as_secs_f64()
     );
+    stage.commit()?;
     Ok(())
 }
 
 fn write_log(
-    a: &DemoArgs,
+    out_dir: &Path,
     sc: &sim2d::Scenario,
     frames: &[sim2d::Frame],
     map: &QualitativeMap,
@@ -333,7 +337,7 @@ fn write_log(
     goal: u32,
     t_map: f64,
 ) -> Result<()> {
-    let mut log = McapLog::create(&a.out.join("run.mcap"))?;
+    let mut log = McapLog::create(&out_dir.join("run.mcap"))?;
     log.add_channel("/navigation", "foxglove.SceneUpdate", None)?;
     log.add_channel("/plan", "qrm.Plan", Some(PLAN_SCHEMA))?;
     log.add_channel("/map/beliefs", "qrm.MapBeliefs", Some(BELIEFS_SCHEMA))?;

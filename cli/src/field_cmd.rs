@@ -11,7 +11,7 @@ use qlink::field::{
 };
 use serde_json::json;
 
-use crate::output::write_atomic;
+use crate::output::{Staging, write_atomic};
 use crate::qlink_cmd::FieldArgs;
 
 /// Thesis Table 4.2: (|P|, paths, mean trajectory length m).
@@ -45,7 +45,19 @@ pub fn run(a: FieldArgs) -> Result<()> {
     }
     let n_worlds = a.worlds.unwrap_or(if a.quick { 1 } else { 5 });
     anyhow::ensure!(n_worlds > 0, "--worlds must be at least 1");
-    std::fs::create_dir_all(&a.out).with_context(|| format!("creating {}", a.out.display()))?;
+    // Refused before anything runs (issue 17: `--worlds 2^64-1` ran with no end). A trial
+    // takes about a tenth of a second to a second; the cap is about a day of work.
+    const MAX_FIELD_TRIALS: u64 = 200_000;
+    let total = (n_worlds as u64).saturating_mul(params.trials as u64);
+    anyhow::ensure!(
+        total <= MAX_FIELD_TRIALS,
+        "{n_worlds} worlds × {} trials = {total} field trials; the limit is {MAX_FIELD_TRIALS}",
+        params.trials
+    );
+    // Written into a staging directory, moved into place only when all is done: a
+    // failure or Ctrl-C leaves nothing a user could take for a result.
+    let stage = Staging::new(&a.out)?;
+    let out_dir = stage.path().to_path_buf();
     let t0 = Instant::now();
     let pb = crate::progress::bar(0, "field trials");
     let variants = FieldVariant::ALL;
@@ -111,13 +123,14 @@ pub fn run(a: FieldArgs) -> Result<()> {
             x.insufficient_features + x.insufficient_features_and_aliasing
         );
     }
-    write_outputs(&a.out, &params, &field, &worlds, &trials, &pooled, secs)?;
+    write_outputs(&out_dir, &params, &field, &worlds, &trials, &pooled, secs)?;
     println!(
         "thesis: 13 of 18 (72 %); {} world(s) × {} trials in {secs:.1} s; wrote {}",
         n_worlds,
         params.trials,
         a.out.display()
     );
+    stage.commit()?;
     Ok(())
 }
 

@@ -28,6 +28,7 @@ use clap::Parser;
 
 fn main() -> ExitCode {
     let cli = args::Cli::parse();
+    output::install_interrupt_handler();
     let result = match cli.command {
         args::Command::Calculus(cmd) => calculus_cmd::run(cmd),
         args::Command::Pqrm(cmd) => pqrm_cmd::run(cmd),

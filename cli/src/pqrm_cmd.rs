@@ -8,16 +8,15 @@ use std::time::Instant;
 use anyhow::{Context, Result, bail, ensure};
 use pqrm::loaders::{Dataset, RangeBearingNoise, read_csv, read_g2o, read_mrclam, read_truth_csv};
 use pqrm::study::{
-    MonteCarloConfig, MonteCarloResult, RealCalculusResult, noise_check, run_monte_carlo, run_real,
-    single_observation,
+    MonteCarloConfig, MonteCarloResult, ObservationQuery, RealCalculusResult, noise_check,
+    run_monte_carlo, run_real,
 };
 use pqrm::{Orderings, Pqrm, PqrmConfig, evaluate};
 use qsr_core::Calculus;
-use serde::Deserialize;
 use serde_json::json;
 
 use crate::args::{MapArgs, PqrmCmd, RealArgs, StudyArgs};
-use crate::output::write_atomic;
+use crate::output::{Staging, write_atomic};
 use crate::plot::{self, Series};
 
 /// Runs one `pqrm` subcommand.
@@ -32,12 +31,6 @@ pub fn run(cmd: PqrmCmd) -> Result<()> {
         PqrmCmd::Study(a) => study(a),
         PqrmCmd::Real(a) => real(a),
     }
-}
-
-#[derive(Deserialize)]
-struct ProbLine {
-    points: [[f64; 2]; 3],
-    cov: [[f64; 3]; 3],
 }
 
 fn prob(calculus: &str, samples: usize, seed: u64, floor: f64) -> Result<()> {
@@ -55,12 +48,10 @@ fn prob(calculus: &str, samples: usize, seed: u64, floor: f64) -> Result<()> {
         if line.trim().is_empty() {
             continue;
         }
-        let p: ProbLine = serde_json::from_str(&line).with_context(|| {
-            format!("line {lineno}: expected {{\"points\": [[x,y]x3], \"cov\": [[sxx,sxy,syy]x3]}}")
-        })?;
-        let covs = p.cov.map(|[a, b, c]| [[a, b], [b, c]]);
-        let probs = single_observation(&calc, p.points, covs, samples, floor, seed)
-            .with_context(|| format!("line {lineno}"))?;
+        let query = ObservationQuery::from_json(&line, Path::new("stdin"), lineno)?;
+        let probs = query
+            .probabilities(&calc, samples, floor, seed)
+            .with_context(|| format!("stdin line {lineno}"))?;
         writeln!(out, "{}", json!({"states": calc.labels(), "p": probs}))?;
     }
     std::io::stdout().lock().write_all(out.as_bytes())?;
@@ -107,8 +98,8 @@ pub fn map(a: MapArgs) -> Result<()> {
         sigma_range: a.sigma_range,
         sigma_bearing: a.sigma_bearing,
     };
-    let mut data = load_dataset(&a.format, &a.input, noise)
-        .with_context(|| format!("reading {}", a.input.display()))?;
+    // The loaders' errors name the file and line themselves.
+    let mut data = load_dataset(&a.format, &a.input, noise)?;
     if let Some(t) = &a.truth {
         data.truth = Some(read_truth_csv(t)?);
     }
@@ -120,8 +111,11 @@ pub fn map(a: MapArgs) -> Result<()> {
         pb.inc(1);
     }
     pb.finish_and_clear();
-    std::fs::create_dir_all(&a.out).with_context(|| format!("creating {}", a.out.display()))?;
-    map.save(&a.out.join("map.json"))?;
+    // Written into a staging directory, moved into place only when all is done: a
+    // failure or Ctrl-C leaves nothing a user could take for a result.
+    let stage = Staging::new(&a.out)?;
+    let out_dir = stage.path().to_path_buf();
+    map.save(&out_dir.join("map.json"))?;
     let mut summary = json!({
         "calculus": map.calculus().name(),
         "n_scans": data.scans.len(),
@@ -146,10 +140,11 @@ pub fn map(a: MapArgs) -> Result<()> {
         obj.insert("normalized_entropy".into(), json!(m.normalized_entropy));
     }
     write_atomic(
-        &a.out.join("summary.json"),
+        &out_dir.join("summary.json"),
         serde_json::to_string_pretty(&summary)?.as_bytes(),
     )?;
     println!("{}", serde_json::to_string_pretty(&summary)?);
+    stage.commit()?;
     Ok(())
 }
 
@@ -177,14 +172,17 @@ fn study(a: StudyArgs) -> Result<()> {
     config.seed = a.seed;
     // Every input is checked before anything is created on disk.
     config.validate()?;
-    std::fs::create_dir_all(&a.out).with_context(|| format!("creating {}", a.out.display()))?;
+    // Written into a staging directory, moved into place only when all is done: a
+    // failure or Ctrl-C leaves nothing a user could take for a result.
+    let stage = Staging::new(&a.out)?;
+    let out_dir = stage.path().to_path_buf();
     let total = (config.trials * config.sigmas.len()) as u64;
     let pb = crate::progress::bar(total, "Monte Carlo trials");
     let start = Instant::now();
     let result = run_monte_carlo(&config, &|| pb.inc(1))?;
     pb.finish_and_clear();
     let secs = start.elapsed().as_secs_f64();
-    write_study(&a.out, &result, secs)?;
+    write_study(&out_dir, &result, secs)?;
     println!(
         "{:<14} {:>7} {:>7} {:>9} {:>9} {:>8} {:>8}",
         "calculus", "σ_R", "σ_N", "entropy", "err", "P(ML)", "nd"
@@ -202,6 +200,7 @@ fn study(a: StudyArgs) -> Result<()> {
         );
     }
     println!("{} trials in {secs:.1} s; wrote {}", total, a.out.display());
+    stage.commit()?;
     Ok(())
 }
 
@@ -666,7 +665,7 @@ fn real(a: RealArgs) -> Result<()> {
         sigma_bearing: a.sigma_bearing,
     };
     let mut data = load_dataset("mrclam", &input, noise)
-        .with_context(|| format!("reading {} (use --input DIR)", input.display()))?;
+        .context("loading the recording (choose it with --input DIR)")?;
     data.scans.retain(|s| s.observations.len() >= 3);
     if let Some(n) = a.max_frames {
         data.scans.truncate(n);
@@ -682,13 +681,16 @@ fn real(a: RealArgs) -> Result<()> {
         ..PqrmConfig::default()
     };
     config.validate()?;
-    std::fs::create_dir_all(&a.out).with_context(|| format!("creating {}", a.out.display()))?;
+    // Written into a staging directory, moved into place only when all is done: a
+    // failure or Ctrl-C leaves nothing a user could take for a result.
+    let stage = Staging::new(&a.out)?;
+    let out_dir = stage.path().to_path_buf();
     let pb = crate::progress::bar(data.scans.len() as u64, "mapping frames");
     let start = Instant::now();
     let results = run_real(&data, &calculi, config, &|| pb.inc(1))?;
     pb.finish_and_clear();
     let secs = start.elapsed().as_secs_f64();
-    write_real(&a.out, &results, &check, data.scans.len(), noise, secs)?;
+    write_real(&out_dir, &results, &check, data.scans.len(), noise, secs)?;
     println!(
         "{:<14} {:>6} {:>9} {:>9} {:>9} {:>9} {:>9}",
         "calculus", "sets", "entropy", "err", "frame err", "nd", "random"
@@ -711,6 +713,7 @@ fn real(a: RealArgs) -> Result<()> {
         100.0 * check.outlier_fraction,
         a.out.display()
     );
+    stage.commit()?;
     Ok(())
 }
 

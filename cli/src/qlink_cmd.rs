@@ -4,10 +4,10 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use anyhow::{Context, Result};
+use anyhow::Result;
 use qlink::study::{SettingInfo, StudyConfig, TableRow, TrialRecord, run_study, table};
 
-use crate::output::write_atomic;
+use crate::output::{Staging, write_atomic};
 use crate::plot::{Series, histogram, line_chart};
 
 /// `qrm qlink ...`.
@@ -95,7 +95,10 @@ fn study(a: StudyArgs) -> Result<()> {
         config.pairs = a.pairs;
     }
     config.settings()?; // rejects an unknown trial before any work
-    std::fs::create_dir_all(&a.out).with_context(|| format!("creating {}", a.out.display()))?;
+    // Written into a staging directory, moved into place only when all is done: a
+    // failure or Ctrl-C leaves nothing a user could take for a result.
+    let stage = Staging::new(&a.out)?;
+    let out_dir = stage.path().to_path_buf();
     let t0 = Instant::now();
     let pb = crate::progress::bar(0, "Q-Link navigations");
     let (records, infos) = run_study(&config, &|n| pb.inc_length(n as u64), &|| pb.inc(1))?;
@@ -105,7 +108,7 @@ fn study(a: StudyArgs) -> Result<()> {
     }
     let secs = t0.elapsed().as_secs_f64();
     let rows = table(&records);
-    write_outputs(&a.out, &records, &rows, &config, &infos, secs)?;
+    write_outputs(&out_dir, &records, &rows, &config, &infos, secs)?;
     println!(
         "{:<13} {:>6} {:>7} {:>8} {:>9} {:>9} {:>8}",
         "trial", "value", "pairs", "no_path", "failures", "rate", "thesis"
@@ -124,6 +127,7 @@ fn study(a: StudyArgs) -> Result<()> {
         );
     }
     println!("study in {secs:.1} s; wrote {}", a.out.display());
+    stage.commit()?;
     Ok(())
 }
 

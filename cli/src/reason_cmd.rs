@@ -328,7 +328,8 @@ pub fn run(cmd: ReasonCmd) -> Result<()> {
 }
 
 fn load_map(path: &std::path::Path) -> Result<pqrm::Pqrm> {
-    pqrm::Pqrm::load(path).with_context(|| format!("loading the map {}", path.display()))
+    // The loader's errors name the file.
+    pqrm::Pqrm::load(path).context("loading the map")
 }
 
 fn export(args: &ExportArgs) -> Result<()> {

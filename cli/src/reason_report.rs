@@ -14,7 +14,7 @@ use pqrm::reason_study::{
 };
 use serde_json::json;
 
-use crate::output::write_atomic;
+use crate::output::{Staging, write_atomic};
 use crate::plot::{self, Series};
 use crate::reason_cmd::ReasonStudyArgs;
 
@@ -24,7 +24,7 @@ pub fn study(a: &ReasonStudyArgs) -> Result<()> {
         .clone()
         .unwrap_or_else(|| PathBuf::from("../shared/data/mrclam-dataset7"));
     let mut data = crate::pqrm_cmd::load_dataset(&a.format, &input, RangeBearingNoise::MRCLAM)
-        .with_context(|| format!("reading {} (use --input)", input.display()))?;
+        .context("loading the recording (choose it with --input)")?;
     if let Some(t) = &a.truth {
         data.truth = Some(pqrm::loaders::read_truth_csv(t)?);
     }
@@ -53,10 +53,13 @@ pub fn study(a: &ReasonStudyArgs) -> Result<()> {
     let results = run_reason_study(&data, &config, &|| pb.inc(1))?;
     pb.finish_and_clear();
     let secs = start.elapsed().as_secs_f64();
-    std::fs::create_dir_all(&a.out).with_context(|| format!("creating {}", a.out.display()))?;
+    // Written into a staging directory, moved into place only when all is done: a
+    // failure or Ctrl-C leaves nothing a user could take for a result.
+    let stage = Staging::new(&a.out)?;
+    let out_dir = stage.path().to_path_buf();
     let best = best_fusion(&results).unwrap_or_default();
     write_atomic(
-        &a.out.join("reason.json"),
+        &out_dir.join("reason.json"),
         serde_json::to_string_pretty(&json!({
             "input": input.display().to_string(),
             "config": config,
@@ -66,10 +69,10 @@ pub fn study(a: &ReasonStudyArgs) -> Result<()> {
         }))?
         .as_bytes(),
     )?;
-    write_atomic(&a.out.join("scores.csv"), scores_csv(&results).as_bytes())?;
+    write_atomic(&out_dir.join("scores.csv"), scores_csv(&results).as_bytes())?;
     let mut figures = Vec::new();
     for r in &results {
-        figures.extend(reliability(&a.out, r)?);
+        figures.extend(reliability(&out_dir, r)?);
         if let Some(p) = &r.picture {
             let pts = |observed: bool| -> Vec<(f64, f64, f64)> {
                 p.points
@@ -79,7 +82,7 @@ pub fn study(a: &ReasonStudyArgs) -> Result<()> {
                     .collect()
             };
             figures.extend(plot::reference_pair(
-                &a.out.join(format!("reference_pair_{}", r.calculus)),
+                &out_dir.join(format!("reference_pair_{}", r.calculus)),
                 &format!(
                     "{}: landmarks in the frame of {}→{}",
                     r.calculus, p.pair[0], p.pair[1]
@@ -90,7 +93,7 @@ pub fn study(a: &ReasonStudyArgs) -> Result<()> {
         }
     }
     let report = report(&input, &results, best, secs, data.scans.len());
-    write_atomic(&a.out.join("report.md"), report.as_bytes())?;
+    write_atomic(&out_dir.join("report.md"), report.as_bytes())?;
     print_summary(&results);
     println!(
         "{} frames, {:.1} s; lowest log loss: {} fusion; wrote {} (report.md, reason.json, \
@@ -101,6 +104,7 @@ pub fn study(a: &ReasonStudyArgs) -> Result<()> {
         a.out.display(),
         figures.len()
     );
+    stage.commit()?;
     Ok(())
 }
 

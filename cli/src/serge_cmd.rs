@@ -11,7 +11,7 @@ use serge::datasets::{DATASETS, Dataset};
 use serge::study::{CvRecord, CvSummary, StudyConfig, cross_validate, summarise};
 use serge::{BeliefSet, CellMasses, Grid, ResolutionTree, SalientRegionMap, Serge, SergeParams};
 
-use crate::output::write_atomic;
+use crate::output::{Staging, write_atomic};
 use crate::plot::{RegionPicture, Series, line_chart, region_map};
 
 /// `qrm serge ...`.
@@ -172,17 +172,20 @@ fn run_map(a: RunArgs) -> Result<()> {
     let serge = Serge::new(&masses)?;
     let map = serge.run(&params)?;
     let secs = start.elapsed().as_secs_f64();
-    std::fs::create_dir_all(&a.out).with_context(|| format!("creating {}", a.out.display()))?;
+    // Written into a staging directory, moved into place only when all is done: a
+    // failure or Ctrl-C leaves nothing a user could take for a result.
+    let stage = Staging::new(&a.out)?;
+    let out_dir = stage.path().to_path_buf();
     let mut doc = map.to_json();
     doc["initial_regions"] = json!(serge.n_initial_regions());
     doc["seconds"] = json!(secs);
     write_atomic(
-        &a.out.join("map.json"),
+        &out_dir.join("map.json"),
         serde_json::to_string_pretty(&doc)?.as_bytes(),
     )?;
     let means: Vec<[f64; 2]> = beliefs.as_slice().iter().map(serge::Belief::mean).collect();
     draw_map(
-        &a.out.join("map"),
+        &out_dir.join("map"),
         &format!(
             "SERGE: {} regions (μ = {}, σ = {}), log saliency {:.3}",
             map.n_regions, a.mu, a.sigma, map.log_saliency
@@ -200,6 +203,7 @@ fn run_map(a: RunArgs) -> Result<()> {
         map.trials,
         a.out.display()
     );
+    stage.commit()?;
     Ok(())
 }
 
@@ -235,7 +239,10 @@ fn study(a: StudyArgs) -> Result<()> {
     } else {
         StudyConfig::full(a.seed)
     };
-    std::fs::create_dir_all(&a.out).with_context(|| format!("creating {}", a.out.display()))?;
+    // Written into a staging directory, moved into place only when all is done: a
+    // failure or Ctrl-C leaves nothing a user could take for a result.
+    let stage = Staging::new(&a.out)?;
+    let out_dir = stage.path().to_path_buf();
     let start = Instant::now();
     let mut results = Vec::new();
     for name in names {
@@ -247,7 +254,7 @@ fn study(a: StudyArgs) -> Result<()> {
         let pb = crate::progress::bar(config.n_runs(data.len()) as u64, &format!("SERGE {name}"));
         let records = cross_validate(&data, &config, &|| pb.inc(1))?;
         pb.finish_and_clear();
-        let dir = a.out.join(name);
+        let dir = out_dir.join(name);
         std::fs::create_dir_all(&dir).with_context(|| format!("creating {}", dir.display()))?;
         let summary = summarise(&records);
         write_records(&dir, &records, &summary)?;
@@ -268,9 +275,9 @@ fn study(a: StudyArgs) -> Result<()> {
         });
     }
     let secs = start.elapsed().as_secs_f64();
-    plot_fig_3_7(&a.out, &results)?;
+    plot_fig_3_7(&out_dir, &results)?;
     let report = report(&results, &config, a.quick, secs);
-    write_atomic(&a.out.join("report.md"), report.as_bytes())?;
+    write_atomic(&out_dir.join("report.md"), report.as_bytes())?;
     println!(
         "{:<15} {:>6} {:>5} {:>7} {:>9} {:>8}",
         "dataset", "sweep", "μ", "σ", "|R|", "error"
@@ -288,6 +295,7 @@ fn study(a: StudyArgs) -> Result<()> {
         }
     }
     println!("study in {secs:.1} s; wrote {}", a.out.display());
+    stage.commit()?;
     Ok(())
 }
 
@@ -893,14 +901,17 @@ fn learn(a: LearnArgs) -> Result<()> {
         ),
     )?;
     let table = serge::learn::compose_table(&calc)?;
-    std::fs::create_dir_all(&a.out).with_context(|| format!("creating {}", a.out.display()))?;
+    // Written into a staging directory, moved into place only when all is done: a
+    // failure or Ctrl-C leaves nothing a user could take for a result.
+    let stage = Staging::new(&a.out)?;
+    let out_dir = stage.path().to_path_buf();
     write_atomic(
-        &a.out.join("calculus.json"),
+        &out_dir.join("calculus.json"),
         calc.spec().to_json_string()?.as_bytes(),
     )?;
     let rows = table_json(&calc, &table);
     write_atomic(
-        &a.out.join("compose.json"),
+        &out_dir.join("compose.json"),
         serde_json::to_string(
             &json!({"states": calc.labels(), "table": rows, "method": "algorithm-3-intervals"}),
         )?
@@ -909,7 +920,7 @@ fn learn(a: LearnArgs) -> Result<()> {
     let mut doc = map.to_json();
     doc["triplets"] = json!(triplets);
     write_atomic(
-        &a.out.join("map.json"),
+        &out_dir.join("map.json"),
         serde_json::to_string(&doc)?.as_bytes(),
     )?;
     let points: Vec<[f64; 2]> = obs
@@ -917,7 +928,7 @@ fn learn(a: LearnArgs) -> Result<()> {
         .filter_map(|o| serge::learn::normalise(o.points[0], o.points[1], o.points[2]))
         .collect();
     draw_map(
-        &a.out.join("calculus"),
+        &out_dir.join("calculus"),
         &format!("learned calculus `{}`: {} states", a.name, calc.n_states()),
         &map,
         &points,
@@ -932,5 +943,6 @@ fn learn(a: LearnArgs) -> Result<()> {
         start.elapsed().as_secs_f64(),
         a.out.display()
     );
+    stage.commit()?;
     Ok(())
 }

@@ -7,7 +7,7 @@ use anyhow::{Context, Result, bail};
 use serde_json::json;
 
 use crate::mcap_log::{McapLog, stamp, yaw};
-use crate::output::write_atomic;
+use crate::output::{Staging, write_atomic};
 
 /// Raw flags of `qrm sim`.
 #[derive(Debug, clap::Args)]
@@ -85,20 +85,23 @@ pub fn run(a: SimArgs) -> Result<()> {
             .map(|(id, i)| (id, sc.world.spec().landmarks[i].pos))
             .collect();
     }
-    std::fs::create_dir_all(&a.out).with_context(|| format!("creating {}", a.out.display()))?;
+    // Written into a staging directory, moved into place only when all is done: a
+    // failure or Ctrl-C leaves nothing a user could take for a result.
+    let stage = Staging::new(&a.out)?;
+    let out_dir = stage.path().to_path_buf();
     let mut csv = Vec::new();
     sim2d::write_observations_csv(&frames, &mut csv)?;
-    write_atomic(&a.out.join("observations.csv"), &csv)?;
+    write_atomic(&out_dir.join("observations.csv"), &csv)?;
     write_atomic(
-        &a.out.join("world.toml"),
+        &out_dir.join("world.toml"),
         toml::to_string(sc.world.spec())?.as_bytes(),
     )?;
     let mut truth_csv = String::from("landmark,x,y\n");
     for (id, p) in &truth {
         truth_csv.push_str(&format!("{id},{},{}\n", p[0], p[1]));
     }
-    write_atomic(&a.out.join("truth.csv"), truth_csv.as_bytes())?;
-    write_log(&a.out.join("run.mcap"), &sc, &frames)?;
+    write_atomic(&out_dir.join("truth.csv"), truth_csv.as_bytes())?;
+    write_log(&out_dir.join("run.mcap"), &sc, &frames)?;
     let traj: Vec<(f64, f64)> = frames.iter().map(|f| (f.pose.x, f.pose.y)).collect();
     let rays: Vec<crate::plot::Segment> = frames
         .iter()
@@ -117,7 +120,7 @@ pub fn run(a: SimArgs) -> Result<()> {
         })
         .collect();
     crate::plot::scenario_map(
-        &a.out.join("scenario"),
+        &out_dir.join("scenario"),
         &format!("{} (seed {})", a.scenario, a.seed),
         sc.world.spec(),
         &traj,
@@ -133,6 +136,7 @@ pub fn run(a: SimArgs) -> Result<()> {
         sc.world.spec().walls.len(),
         a.out.display()
     );
+    stage.commit()?;
     Ok(())
 }
 

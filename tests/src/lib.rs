@@ -3,6 +3,8 @@
 
 use std::path::PathBuf;
 
+pub mod fuzz;
+
 /// The workspace root.
 #[must_use]
 pub fn workspace_root() -> PathBuf {

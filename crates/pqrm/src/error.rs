@@ -39,7 +39,7 @@ pub enum PqrmError {
     #[error(transparent)]
     Calculus(#[from] QsrError),
     /// A file could not be read or written.
-    #[error("{path}: {source}")]
+    #[error("{path}")]
     Io {
         /// The file.
         path: PathBuf,

@@ -66,15 +66,46 @@ fn parse_err(path: &Path, line: usize, reason: impl Into<String>) -> PqrmError {
     }
 }
 
-fn numbers(path: &Path, lineno: usize, fields: &[&str]) -> Result<Vec<f64>> {
+/// Finite numbers only: NaN or infinity in a recording is a defect of the file, named with
+/// its line, never a value passed on.
+/// `names` names the columns in errors (`field k` beyond them).
+/// Columns of our observation CSV.
+const CSV_COLUMNS: [&str; 8] = ["t", "robot", "landmark", "x", "y", "cxx", "cxy", "cyy"];
+/// Values of a g2o `LANDMARK` line.
+const G2O_COLUMNS: [&str; 7] = ["pose", "landmark", "x", "y", "cxx", "cxy", "cyy"];
+
+fn numbers(path: &Path, lineno: usize, fields: &[&str], names: &[&str]) -> Result<Vec<f64>> {
+    let name = |k: usize| {
+        names
+            .get(k)
+            .map_or_else(|| format!("field {}", k + 1), |n| (*n).to_owned())
+    };
     fields
         .iter()
-        .map(|f| {
-            f.trim()
-                .parse::<f64>()
-                .map_err(|_| parse_err(path, lineno, format!("`{f}` is not a number")))
+        .enumerate()
+        .map(|(k, f)| match f.trim().parse::<f64>() {
+            Ok(v) if v.is_finite() => Ok(v),
+            Ok(_) => Err(parse_err(
+                path,
+                lineno,
+                format!("{}: `{}` is not a finite number", name(k), shown(f)),
+            )),
+            Err(_) => Err(parse_err(
+                path,
+                lineno,
+                format!("{}: `{}` is not a number", name(k), shown(f)),
+            )),
         })
         .collect()
+}
+
+/// A field as quoted in an error: at most 40 characters (a 2 MB field is not echoed whole).
+pub(crate) fn shown(field: &str) -> String {
+    const MAX: usize = 40;
+    match field.char_indices().nth(MAX) {
+        None => field.to_owned(),
+        Some((cut, _)) => format!("{}… ({} bytes)", &field[..cut], field.len()),
+    }
 }
 
 /// Groups `(t, robot, observation, line)` rows into validated scans sorted by time then
@@ -137,7 +168,15 @@ fn id_field(path: &Path, line: usize, field: &str, v: f64) -> Result<u32> {
 /// count or a bad number; observation errors (bad covariance, duplicate landmark in a scan)
 /// are reported with the line too.
 pub fn read_csv(path: &Path) -> Result<Dataset> {
-    let text = read(path)?;
+    parse_csv(&read(path)?, path)
+}
+
+/// As [`read_csv`], from text already read (`path` names it in errors): the entry point
+/// the fuzz targets drive.
+///
+/// # Errors
+/// As [`read_csv`] without the I/O.
+pub fn parse_csv(text: &str, path: &Path) -> Result<Dataset> {
     let mut lines = text
         .lines()
         .enumerate()
@@ -164,7 +203,7 @@ pub fn read_csv(path: &Path) -> Result<Dataset> {
                 format!("expected 8 fields, found {}", f.len()),
             ));
         }
-        let v = numbers(path, lineno, &f)?;
+        let v = numbers(path, lineno, &f, &CSV_COLUMNS)?;
         let (robot, id) = (v[1], v[2]);
         if robot < 0.0
             || robot.fract() != 0.0
@@ -227,8 +266,29 @@ pub fn write_csv(scans: &[Scan], out: &mut impl Write) -> std::io::Result<()> {
 /// # Errors
 /// [`PqrmError::Io`], [`PqrmError::Parse`].
 pub fn read_truth_csv(path: &Path) -> Result<GroundTruth> {
-    let text = read(path)?;
+    parse_truth_csv(&read(path)?, path)
+}
+
+/// As [`read_truth_csv`], from text already read (`path` names it in errors): the entry point
+/// the fuzz targets drive.
+///
+/// # Errors
+/// As [`read_truth_csv`] without the I/O.
+pub fn parse_truth_csv(text: &str, path: &Path) -> Result<GroundTruth> {
     let mut truth = GroundTruth::default();
+    // A landmark surveyed twice would silently keep the last position.
+    let mut lines: BTreeMap<u32, usize> = BTreeMap::new();
+    let header = text.lines().next().unwrap_or_default().trim();
+    if header.replace(' ', "") != "landmark,x,y" {
+        return Err(parse_err(
+            path,
+            1,
+            format!(
+                "expected the header `landmark,x,y`, found `{}`",
+                shown(header)
+            ),
+        ));
+    }
     for (i, line) in text.lines().enumerate().skip(1) {
         if line.trim().is_empty() {
             continue;
@@ -237,18 +297,31 @@ pub fn read_truth_csv(path: &Path) -> Result<GroundTruth> {
         if f.len() != 3 {
             return Err(parse_err(path, i + 1, "expected `landmark,x,y`"));
         }
-        let v = numbers(path, i + 1, &f)?;
+        let v = numbers(path, i + 1, &f, &["landmark", "x", "y"])?;
         let id = id_field(path, i + 1, "landmark", v[0])?;
         if !v[1].is_finite() || !v[2].is_finite() {
             return Err(parse_err(path, i + 1, "bad landmark position"));
         }
+        if let Some(first) = lines.insert(id, i + 1) {
+            return Err(parse_err(
+                path,
+                i + 1,
+                format!(
+                    "landmark {id} is surveyed twice (lines {first} and {})",
+                    i + 1
+                ),
+            ));
+        }
         truth.positions.insert(LandmarkId(id), [v[1], v[2]]);
+    }
+    if truth.positions.is_empty() {
+        return Err(parse_err(path, 1, "no surveyed landmark after the header"));
     }
     Ok(truth)
 }
 
 /// Non-comment lines of a MRCLAM `.dat` file split on whitespace, with line numbers.
-fn dat_rows(path: &Path) -> Result<Vec<(usize, Vec<f64>)>> {
+fn dat_rows(path: &Path, names: &[&str]) -> Result<Vec<(usize, Vec<f64>)>> {
     let text = read(path)?;
     let mut out = Vec::new();
     for (i, line) in text.lines().enumerate() {
@@ -257,7 +330,7 @@ fn dat_rows(path: &Path) -> Result<Vec<(usize, Vec<f64>)>> {
             continue;
         }
         let f: Vec<&str> = t.split_whitespace().collect();
-        out.push((i + 1, numbers(path, i + 1, &f)?));
+        out.push((i + 1, numbers(path, i + 1, &f, names)?));
     }
     Ok(out)
 }
@@ -270,7 +343,10 @@ fn dat_rows(path: &Path) -> Result<Vec<(usize, Vec<f64>)>> {
 pub fn read_mrclam(dir: &Path, noise: RangeBearingNoise) -> Result<Dataset> {
     let file = |name: &str| -> PathBuf { dir.join(name) };
     let mut truth = GroundTruth::default();
-    for (line, v) in dat_rows(&file("Landmark_Groundtruth.dat"))? {
+    for (line, v) in dat_rows(
+        &file("Landmark_Groundtruth.dat"),
+        &["subject", "x", "y", "x_std", "y_std"],
+    )? {
         if v.len() < 3 {
             return Err(parse_err(
                 &file("Landmark_Groundtruth.dat"),
@@ -280,10 +356,17 @@ pub fn read_mrclam(dir: &Path, noise: RangeBearingNoise) -> Result<Dataset> {
         }
         let gt = file("Landmark_Groundtruth.dat");
         let id = id_field(&gt, line, "subject", v[0])?;
+        if truth.positions.contains_key(&LandmarkId(id)) {
+            return Err(parse_err(
+                &gt,
+                line,
+                format!("subject {id} is surveyed twice"),
+            ));
+        }
         truth.positions.insert(LandmarkId(id), [v[1], v[2]]);
     }
     let mut barcode_to_subject = BTreeMap::new();
-    for (line, v) in dat_rows(&file("Barcodes.dat"))? {
+    for (line, v) in dat_rows(&file("Barcodes.dat"), &["subject", "barcode"])? {
         if v.len() != 2 {
             return Err(parse_err(
                 &file("Barcodes.dat"),
@@ -306,7 +389,7 @@ pub fn read_mrclam(dir: &Path, noise: RangeBearingNoise) -> Result<Dataset> {
             continue;
         }
         found_any = true;
-        for (line, v) in dat_rows(&path)? {
+        for (line, v) in dat_rows(&path, &["time", "barcode", "range", "bearing"])? {
             if v.len() != 4 {
                 return Err(parse_err(
                     &path,
@@ -344,6 +427,16 @@ pub fn read_mrclam(dir: &Path, noise: RangeBearingNoise) -> Result<Dataset> {
             ),
         });
     }
+    if rows.is_empty() {
+        return Err(parse_err(
+            &file("Robot1_Measurement.dat"),
+            1,
+            format!(
+                "no measurement of a surveyed landmark in any RobotN_Measurement.dat ({skipped} \
+                 skipped: robots or unknown barcodes)"
+            ),
+        ));
+    }
     // A robot occasionally reports the same landmark twice in one frame: keep the first.
     rows.sort_by(|a, b| {
         a.0.total_cmp(&b.0)
@@ -366,7 +459,15 @@ pub fn read_mrclam(dir: &Path, noise: RangeBearingNoise) -> Result<Dataset> {
 /// # Errors
 /// [`PqrmError::Io`], [`PqrmError::Parse`].
 pub fn read_g2o(path: &Path) -> Result<Dataset> {
-    let text = read(path)?;
+    parse_g2o(&read(path)?, path)
+}
+
+/// As [`read_g2o`], from text already read (`path` names it in errors): the entry point
+/// the fuzz targets drive.
+///
+/// # Errors
+/// As [`read_g2o`] without the I/O.
+pub fn parse_g2o(text: &str, path: &Path) -> Result<Dataset> {
     let mut rows = Vec::new();
     let mut skipped = 0;
     for (i, line) in text.lines().enumerate() {
@@ -380,7 +481,7 @@ pub fn read_g2o(path: &Path) -> Result<Dataset> {
                         format!("LANDMARK needs 7 values, found {}", f.len() - 1),
                     ));
                 }
-                let v = numbers(path, i + 1, &f[1..])?;
+                let v = numbers(path, i + 1, &f[1..], &G2O_COLUMNS)?;
                 if !v[0].is_finite() {
                     return Err(parse_err(path, i + 1, "pose is not finite"));
                 }

@@ -481,7 +481,11 @@ impl Pqrm {
             path: path.to_path_buf(),
             source,
         })?;
-        Self::from_json(&text)
+        // Name the file in format errors (the I/O error above names it already).
+        Self::from_json(&text).map_err(|e| match e {
+            PqrmError::Format(m) => PqrmError::Format(format!("{}: {m}", path.display())),
+            other => other,
+        })
     }
 }
 

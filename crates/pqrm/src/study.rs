@@ -738,7 +738,14 @@ pub fn noise_check(dataset: &Dataset) -> Result<NoiseCheck> {
     }
     let n = z.len() as f64;
     let mean = z.iter().sum::<f64>() / n;
-    let std = (z.iter().map(|v| (v - mean) * (v - mean)).sum::<f64>() / n).sqrt();
+    // Scaled by the largest deviation so squares cannot overflow (a surveyed coordinate of
+    // 1e154 gave `z std inf`, issue 17).
+    let scale = z.iter().fold(0.0_f64, |m, v| m.max((v - mean).abs()));
+    let std = if scale > 0.0 && scale.is_finite() {
+        scale * (z.iter().map(|v| ((v - mean) / scale).powi(2)).sum::<f64>() / n).sqrt()
+    } else {
+        scale
+    };
     let median = |mut v: Vec<f64>| {
         v.sort_by(f64::total_cmp);
         v[v.len() / 2]
@@ -750,6 +757,57 @@ pub fn noise_check(dataset: &Dataset) -> Result<NoiseCheck> {
         outlier_fraction: z.iter().filter(|v| v.abs() > 3.0).count() as f64 / n,
         median_abs_error: median(abs_err),
     })
+}
+
+/// One query of `qrm pqrm prob`: three points and their covariances `[sxx, sxy, syy]`, as
+/// the JSON line `{"points": [[x, y] x3], "cov": [[sxx, sxy, syy] x3]}`.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+pub struct ObservationQuery {
+    /// The three means.
+    pub points: [[f64; 2]; 3],
+    /// Their covariances, upper triangle.
+    pub cov: [[f64; 3]; 3],
+}
+
+impl ObservationQuery {
+    /// Parses one JSON line; `origin` and `line` name it in errors.
+    ///
+    /// # Errors
+    /// [`PqrmError::Parse`] naming the origin, the line and what is malformed.
+    pub fn from_json(text: &str, origin: &std::path::Path, line: usize) -> Result<Self> {
+        serde_json::from_str(text).map_err(|e| PqrmError::Parse {
+            path: origin.to_path_buf(),
+            line,
+            reason: format!("expected {{\"points\": [[x,y]x3], \"cov\": [[sxx,sxy,syy]x3]}}: {e}"),
+        })
+    }
+
+    /// The covariances as 2×2 matrices.
+    #[must_use]
+    pub fn covariances(&self) -> [[[f64; 2]; 2]; 3] {
+        self.cov.map(|[a, b, c]| [[a, b], [b, c]])
+    }
+
+    /// `p(R | Z)` of this query ([`single_observation`]).
+    ///
+    /// # Errors
+    /// As [`single_observation`].
+    pub fn probabilities(
+        &self,
+        calculus: &Calculus,
+        samples: usize,
+        floor: f64,
+        seed: u64,
+    ) -> Result<Vec<f64>> {
+        single_observation(
+            calculus,
+            self.points,
+            self.covariances(),
+            samples,
+            floor,
+            seed,
+        )
+    }
 }
 
 /// `p(R | Z)` of a single observation of three points given in one frame (world or robot),

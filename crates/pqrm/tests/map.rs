@@ -370,3 +370,44 @@ fn study_shards_merge_into_the_single_run() {
     dup.push(records[0].clone());
     assert!(aggregate_monte_carlo(&cfg, &dup).is_err());
 }
+
+/// Regression (issue 17, found by the `truth_csv` corpus): a landmark surveyed twice kept the
+/// last position silently; now an error naming both lines.
+#[test]
+fn a_landmark_surveyed_twice_is_refused_with_both_lines() {
+    let e = pqrm::loaders::parse_truth_csv(
+        "landmark,x,y\n1,0,0\n2,1,1\n1,2,3\n",
+        std::path::Path::new("t.csv"),
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(e.contains("t.csv:4") && e.contains("lines 2 and 4"), "{e}");
+}
+
+/// Regression (issue 17, found by the `mrclam` fuzz target): NaN in a recording was passed on
+/// as a measurement; every loader now refuses non-finite numbers naming file, line and field.
+#[test]
+fn non_finite_numbers_are_refused_with_their_field() {
+    let e = pqrm::loaders::parse_csv(
+        "t,robot,landmark,x,y,cxx,cxy,cyy\n0,0,1,inf,1,1,0,1\n",
+        std::path::Path::new("o.csv"),
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(
+        e.contains("o.csv:2") && e.contains("x: `inf` is not a finite number"),
+        "{e}"
+    );
+    let long = "9".repeat(2 << 20);
+    let e = pqrm::loaders::parse_g2o(
+        &format!("LANDMARK 0 1 {long}x 2 1 0 1\n"),
+        std::path::Path::new("g.g2o"),
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(
+        e.len() < 300,
+        "a 2 MB field is not echoed whole: {} bytes",
+        e.len()
+    );
+}

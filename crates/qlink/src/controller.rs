@@ -96,9 +96,19 @@ pub fn robot_state(calculus: &Calculus, a: [f64; 2], b: [f64; 2], p: [f64; 2]) -
 }
 
 /// A full circle of radius `r` about `centre`: from `from`, straight to the circle, then
-/// once around (counter-clockwise), as waypoints every `step_deg` degrees.
+/// once around (counter-clockwise), as waypoints every `step_deg` degrees (at least 0.5°).
+///
+/// A radius that is not finite and ≥ 0, or a non-finite point, gives no circle: the path is
+/// just `from` when it is finite, else empty — never NaN waypoints (issue 17).
 #[must_use]
 pub fn circle(centre: [f64; 2], r: f64, from: [f64; 2], step_deg: f64) -> Vec<[f64; 2]> {
+    let finite = |p: [f64; 2]| p.iter().all(|v| v.is_finite());
+    if !finite(from) {
+        return Vec::new();
+    }
+    if !(r.is_finite() && r >= 0.0 && finite(centre)) {
+        return vec![from];
+    }
     let start = (from[1] - centre[1]).atan2(from[0] - centre[0]);
     let n = (360.0 / step_deg.max(0.5)).ceil() as usize;
     let mut out = vec![from];
@@ -384,4 +394,28 @@ pub fn closest_point(
     best.map(|(x, _)| x).ok_or_else(|| {
         QlinkError::InvalidParameter(format!("state {target} has no feasible convex piece"))
     })
+}
+
+#[cfg(test)]
+mod circle_tests {
+    use super::circle;
+
+    /// Regression (issue 17): `circle` with `r = NaN` returned NaN waypoints.
+    #[test]
+    fn circle_never_returns_nan_waypoints() {
+        for (c, r, from) in [
+            ([0.0, 0.0], f64::NAN, [1.0, 0.0]),
+            ([0.0, 0.0], f64::INFINITY, [1.0, 0.0]),
+            ([0.0, 0.0], -1.0, [1.0, 0.0]),
+            ([f64::NAN, 0.0], 1.0, [1.0, 0.0]),
+            ([0.0, 0.0], 1.0, [f64::NAN, 0.0]),
+        ] {
+            let p = circle(c, r, from, f64::NAN);
+            assert!(
+                p.iter().flatten().all(|v| v.is_finite()),
+                "{c:?} {r} {from:?}: {p:?}"
+            );
+        }
+        assert!(circle([0.0, 0.0], 2.0, [5.0, 0.0], 10.0).len() > 30);
+    }
 }

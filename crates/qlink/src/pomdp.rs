@@ -21,6 +21,9 @@ use serde::{Deserialize, Serialize};
 
 use crate::error::{QlinkError, Result};
 
+/// The most belief updates one decision's look-ahead may take (about a minute).
+pub const MAX_POMDP_WORK: f64 = 1e10;
+
 /// A search POMDP over the states of one calculus.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct SearchPomdp {
@@ -138,6 +141,28 @@ impl SearchPomdp {
                 "the horizon must be ≥ 1".into(),
             ));
         }
+        self.check_work(self.horizon)
+    }
+
+    /// The look-ahead visits about `b^h` beliefs (`b` the most moves allowed from a state) of
+    /// `n` entries each: refused beyond [`MAX_POMDP_WORK`] with the estimate instead of
+    /// running without end (issue 17: horizon 1000).
+    fn check_work(&self, horizon: usize) -> Result<()> {
+        let n = self.n_states().max(1) as f64;
+        let b = self
+            .allowed
+            .iter()
+            .map(|row| row.iter().filter(|a| **a).count())
+            .max()
+            .unwrap_or(1)
+            .max(1) as f64;
+        let work = n * b.powf(horizon as f64);
+        if work > MAX_POMDP_WORK {
+            return Err(QlinkError::InvalidParameter(format!(
+                "a horizon-{horizon} look-ahead over {b} moves per state is about {work:.1e} \
+                 belief updates; the limit is {MAX_POMDP_WORK:.0e}: use a shorter horizon"
+            )));
+        }
         Ok(())
     }
 
@@ -193,6 +218,7 @@ impl SearchPomdp {
                 belief.len()
             )));
         }
+        self.check_work(horizon)?;
         let s: f64 = belief.iter().sum();
         let b: Vec<f64> = if s > 0.0 {
             belief.iter().map(|p| p / s).collect()

@@ -109,9 +109,22 @@ pub(crate) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     Ok(())
 }
 
+/// An error and its causes, `a: b: c` (errors keep their cause out of their own text, as
+/// the standard library's convention asks, so it is not printed twice by chain printers).
+pub(crate) fn chain(e: &dyn std::error::Error) -> String {
+    let mut msg = e.to_string();
+    let mut cause = e.source();
+    while let Some(c) = cause {
+        msg.push_str(": ");
+        msg.push_str(&c.to_string());
+        cause = c.source();
+    }
+    msg
+}
+
 /// The Python exception for a calculus-layer error.
 pub(crate) fn qsr(e: QsrError) -> PyErr {
-    let msg = e.to_string();
+    let msg = chain(&e);
     match e {
         QsrError::DegenerateFrame { .. } => DegenerateFrame::new_err(msg),
         QsrError::NonFinite { .. } | QsrError::Arity(_) | QsrError::TooLarge { .. } => {
@@ -132,7 +145,7 @@ pub(crate) fn qsr(e: QsrError) -> PyErr {
 
 /// The Python exception for a mapper error.
 pub(crate) fn pqrm(e: PqrmError) -> PyErr {
-    let msg = e.to_string();
+    let msg = chain(&e);
     match e {
         PqrmError::Calculus(inner) => qsr(inner),
         PqrmError::CoincidentLandmarks { .. } => DegenerateFrame::new_err(msg),

@@ -16,7 +16,7 @@ use crate::mapping::Pqrm;
 
 /// The Python exception for a Q-Link error.
 pub(crate) fn qlink_err(e: QlinkError) -> PyErr {
-    let msg = e.to_string();
+    let msg = crate::errors::chain(&e);
     match e {
         QlinkError::Calculus(inner) => qsr(inner),
         QlinkError::Pqrm(inner) => pqrm(inner),

@@ -10,7 +10,7 @@ use crate::errors::{FormatError, InvalidInput, IoError, invalid, qsr};
 
 /// The Python exception for a SERGE error.
 pub(crate) fn serge_err(e: SergeError) -> PyErr {
-    let msg = e.to_string();
+    let msg = crate::errors::chain(&e);
     match e {
         SergeError::Calculus(inner) => qsr(inner),
         SergeError::Parse { .. } => FormatError::new_err(msg),

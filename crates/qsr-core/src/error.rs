@@ -101,7 +101,7 @@ pub enum QsrError {
         reason: String,
     },
     /// A spec file could not be read.
-    #[error("cannot read {path}: {source}")]
+    #[error("cannot read {path}")]
     Io {
         /// The file.
         path: PathBuf,

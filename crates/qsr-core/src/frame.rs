@@ -114,7 +114,13 @@ fn denormalise(origin: &Point2<f64>, axis: &Vector2<f64>, q: &Point2<f64>) -> Po
 }
 
 pub(crate) fn coincident(a: &Point2<f64>, b: &Point2<f64>) -> bool {
-    let scale2 = 1.0 + a.coords.norm_squared() + b.coords.norm_squared();
+    // Scale-free: divide by the largest coordinate first, so points 1e300 apart do not
+    // overflow into "coincident" (inf ≤ inf) and the test means the same at every scale.
+    let s = [a.x, a.y, b.x, b.y]
+        .iter()
+        .fold(1.0_f64, |m, v| m.max(v.abs()));
+    let (a, b) = (a.coords / s, b.coords / s);
+    let scale2 = 1.0 / (s * s) + a.norm_squared() + b.norm_squared();
     let d2 = (b - a).norm_squared();
     d2.is_nan() || d2 <= DEGENERATE_TOLERANCE * DEGENERATE_TOLERANCE * scale2
 }
@@ -138,6 +144,15 @@ impl TernaryFrame {
         if coincident(&a, &b) {
             return Err(QsrError::DegenerateFrame {
                 reason: format!("reference points coincide: A = {a:?}, B = {b:?}"),
+            });
+        }
+        let len2 = (b - a).norm_squared();
+        if !len2.is_finite() {
+            return Err(QsrError::NonFinite {
+                what: format!(
+                    "reference points A = {a:?}, B = {b:?} are too far apart to normalise \
+                     (|B − A|² overflows)"
+                ),
             });
         }
         Ok(Self::new_unchecked(a, b))

@@ -313,3 +313,38 @@ fn any_opra_granularity_classifies_and_too_fine_tables_are_refused_with_the_esti
     let cost = BinaryCalculus::builtin("opra-10").unwrap().compose_cost();
     assert!(cost.bytes <= qsr_core::binary::MAX_TABLE_BYTES);
 }
+
+/// Regression (issue 17): points 1e300 apart were "coincident" because the tolerance test
+/// overflowed (inf ≤ inf), and points ~1e308 apart normalised every third point to (0, 0).
+#[test]
+fn far_apart_reference_points_are_not_coincident_and_overflow_is_named() {
+    let edc = qsr_core::Calculus::builtin("edc").unwrap();
+    let r = edc.classify_triplet(
+        Point2::new(0.0, 0.0),
+        Point2::new(0.0, 1e150),
+        Point2::new(-2e149, 3e149),
+    );
+    assert_eq!(
+        edc.label(r.unwrap()),
+        "13",
+        "a scaled copy of the doc example"
+    );
+    // Beyond ~1e154 apart |B − A|² overflows: named as such, not as "coincide".
+    for far in [1e300, 1e308] {
+        let e = edc
+            .classify_triplet(
+                Point2::new(0.0, -far),
+                Point2::new(0.0, far),
+                Point2::origin(),
+            )
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("too far apart"), "{e}");
+    }
+    let same = edc.classify_triplet(
+        Point2::new(1e300, 0.0),
+        Point2::new(1e300, 0.0),
+        Point2::origin(),
+    );
+    assert!(same.unwrap_err().to_string().contains("coincide"));
+}

@@ -42,7 +42,7 @@ pub enum SergeError {
     #[error(transparent)]
     Calculus(#[from] QsrError),
     /// A file could not be read or written.
-    #[error("{path}: {source}")]
+    #[error("{path}")]
     Io {
         /// The file.
         path: PathBuf,

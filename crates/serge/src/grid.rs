@@ -21,6 +21,8 @@ use crate::error::{Result, SergeError};
 
 /// Most cells a grid may have (masses are stored densely, `K × N` f64).
 pub const MAX_CELLS: usize = 4_000_000;
+/// The most memory the K × N cell masses may take.
+pub const MAX_MASS_BYTES: u64 = 4 << 30;
 
 /// A rectangular grid: `nx × ny` cells over `window = [x0, x1, y0, y1]`, row-major, row 0 at
 /// `y0`.
@@ -42,7 +44,14 @@ impl Grid {
     /// that is zero or above [`MAX_CELLS`].
     pub fn new(window: [f64; 4], nx: usize, ny: usize) -> Result<Self> {
         let [x0, x1, y0, y1] = window;
-        if !window.iter().all(|v| v.is_finite()) || x1 <= x0 || y1 <= y0 {
+        // The extent too must be finite: [-1.7e308, 1.7e308] has finite ends and an infinite
+        // width, which made every cell infinitely wide (issue 17).
+        if !window.iter().all(|v| v.is_finite())
+            || x1 <= x0
+            || y1 <= y0
+            || !(x1 - x0).is_finite()
+            || !(y1 - y0).is_finite()
+        {
             return Err(SergeError::InvalidParameter(format!(
                 "grid window {window:?} must be finite with x_min < x_max and y_min < y_max"
             )));
@@ -173,21 +182,23 @@ impl CellMasses {
     pub fn compute(beliefs: &BeliefSet, grid: Grid) -> Result<Self> {
         let n = grid.len();
         let k = beliefs.len();
-        if k.saturating_mul(n) > 1usize << 31 {
+        // Estimated before allocating: 400 beliefs on a 2000×2000 grid are 12.8 GB of masses,
+        // which the allocator would abort on rather than report (issue 17).
+        let bytes = (k as u64).saturating_mul(n as u64).saturating_mul(8);
+        if bytes > MAX_MASS_BYTES {
             return Err(SergeError::InvalidParameter(format!(
-                "{k} beliefs × {n} cells is too many masses to hold; use a coarser grid"
+                "{k} beliefs × {n} cells need {:.1} GiB of cell masses; the limit is {} GiB: \
+                 use a coarser grid",
+                bytes as f64 / f64::from(1u32 << 30),
+                MAX_MASS_BYTES >> 30
             )));
         }
-        let rows: Vec<Vec<f64>> = beliefs
-            .as_slice()
-            .par_iter()
-            .map(|b| belief_masses(b, &grid))
-            .collect();
-        Ok(Self {
-            grid,
-            k,
-            data: rows.concat(),
-        })
+        // Written in place, one belief's row per task: no second copy at the peak.
+        let mut data = vec![0.0; k * n];
+        data.par_chunks_mut(n.max(1))
+            .zip(beliefs.as_slice().par_iter())
+            .for_each(|(row, b)| row.copy_from_slice(&belief_masses(b, &grid)));
+        Ok(Self { grid, k, data })
     }
 
     /// The grid.

@@ -36,6 +36,11 @@ use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 
+/// The most greedy-merge steps (trials × initial regions²) one run may take: about an hour on
+/// two cores. Beyond it a run is refused with the estimate (issue 17: `--trials 2^64-1` ran
+/// with no result, no progress and no end).
+pub const MAX_SEARCH_WORK: u64 = 1_000_000_000_000;
+
 use crate::error::{Result, SergeError};
 use crate::grid::CellMasses;
 use crate::init::{InitialRegions, initial_regions};
@@ -207,7 +212,9 @@ impl TrialState {
 /// `log ψ1(|R|)` including the normalisation β of eq. 3.5 (`−∞` off μ when σ = 0).
 #[must_use]
 pub fn log_psi1(n_regions: usize, mu: usize, sigma: f64, k: usize) -> f64 {
-    if sigma == 0.0 {
+    let two_var = 2.0 * sigma * sigma;
+    // σ so small that 2σ² underflows behaves as σ = 0 (else 0/0 = NaN at r = μ).
+    if sigma == 0.0 || two_var == 0.0 {
         return if n_regions == mu {
             0.0
         } else {
@@ -216,11 +223,14 @@ pub fn log_psi1(n_regions: usize, mu: usize, sigma: f64, k: usize) -> f64 {
     }
     let g = |r: usize| {
         let d = r as f64 - mu as f64;
-        -d * d / (2.0 * sigma * sigma)
+        -d * d / two_var
     };
-    let ln_norm = (2.0 * std::f64::consts::PI * sigma * sigma).sqrt().ln();
-    let beta: f64 = (1..=k.max(1)).map(|r| (g(r) - ln_norm).exp()).sum();
-    g(n_regions) - ln_norm - beta.max(f64::MIN_POSITIVE).ln()
+    // The Gaussian's normalising constant cancels between g(n) and the sum over r, so it is
+    // left out: with σ = 1e300 it is infinite and gave log φ = −∞ (issue 17). Log-sum-exp
+    // about the largest term (0, at r = μ when 1 ≤ μ ≤ K) keeps the sum finite.
+    let top = (1..=k.max(1)).map(g).fold(f64::NEG_INFINITY, f64::max);
+    let sum: f64 = (1..=k.max(1)).map(|r| (g(r) - top).exp()).sum();
+    g(n_regions) - top - sum.ln()
 }
 
 /// Gain in log ψ1 of one more merge from `r` regions.
@@ -341,6 +351,18 @@ impl<'a> Serge<'a> {
         let trials = params.trials.unwrap_or(100 * k);
         if trials == 0 {
             return Err(SergeError::InvalidParameter("trials must be ≥ 1".into()));
+        }
+        // A trial merges regions greedily from the initial map: about (initial regions)²
+        // candidate merges. Refuse what would run for hours instead of starting it.
+        let per_trial = (self.init.cells.len() as u64).max(1).saturating_pow(2);
+        let work = (trials as u64).saturating_mul(per_trial);
+        if work > MAX_SEARCH_WORK {
+            return Err(SergeError::InvalidParameter(format!(
+                "{trials} trials × about {per_trial} candidate merges each = {work:.1e} steps; the \
+                 limit is {MAX_SEARCH_WORK:.0e} (hours of work): ask for fewer trials",
+                work = work as f64,
+                MAX_SEARCH_WORK = MAX_SEARCH_WORK as f64
+            )));
         }
         Ok(trials)
     }

@@ -260,3 +260,57 @@ fn resolution_tree_levels_and_coarse_to_fine_plan() {
         );
     }
 }
+
+/// Regression (issue 17): `serge run --sigma 1e300` printed `log φ -inf` (the Gaussian's
+/// normalising constant overflowed) and a window of ±1.7e308 gave infinitely wide cells.
+#[test]
+fn extreme_sigma_and_windows_stay_finite_or_are_refused() {
+    for sigma in [1e300, 1e-300, 1e-160, 1.0] {
+        let v = serge::log_psi1(3, 2, sigma, 5);
+        assert!(!v.is_nan(), "σ = {sigma}: {v}");
+        if sigma >= 1.0 {
+            assert!(v.is_finite(), "σ = {sigma}: {v}");
+        }
+    }
+    // σ → ∞: every region count equally likely, ψ1 = 1/K.
+    assert!((serge::log_psi1(3, 2, 1e300, 5) + 5f64.ln()).abs() < 1e-12);
+    assert!(Grid::new([-1.7e308, 1.7e308, 0.0, 1.0], 10, 10).is_err());
+    let m = masses(
+        vec![
+            iso([0.0, 0.0], 1.0),
+            iso([3.0, 0.0], 1.0),
+            iso([0.0, 3.0], 1.0),
+        ],
+        30,
+    );
+    let map = Serge::new(&m)
+        .unwrap()
+        .run(&SergeParams::new(2, 1e300).trials(20))
+        .unwrap();
+    assert!(map.log_phi().is_finite(), "log φ {}", map.log_phi());
+}
+
+/// Issue 17: work and memory are estimated before starting; impossible sizes are refused
+/// with the estimate instead of running forever or aborting in the allocator.
+#[test]
+fn runaway_trials_and_masses_are_refused_with_the_estimate() {
+    let m = masses(
+        vec![
+            iso([0.0, 0.0], 1.0),
+            iso([3.0, 0.0], 1.0),
+            iso([0.0, 3.0], 1.0),
+        ],
+        30,
+    );
+    let e = Serge::new(&m)
+        .unwrap()
+        .run(&SergeParams::new(2, 1.0).trials(usize::MAX))
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("limit") && e.contains("trials"), "{e}");
+    let beliefs: Vec<Belief> = (0..400).map(|i| iso([f64::from(i), 0.0], 1.0)).collect();
+    let set = BeliefSet::new(beliefs).unwrap();
+    let grid = Grid::new([0.0, 400.0, -5.0, 5.0], 2000, 2000).unwrap();
+    let e = CellMasses::compute(&set, grid).unwrap_err().to_string();
+    assert!(e.contains("GiB"), "{e}");
+}

@@ -1,0 +1,422 @@
+//! `docs/reliability.md`, produced by this test: every input surface of the CLI × every class
+//! of bad input, run as a user would, with what happened. The test fails when any run panics,
+//! is killed, leaves an output directory behind after failing, or prints NaN/inf in an
+//! accepted result — and when the committed table differs from what the binary does now
+//! (regenerate with `QRM_BLESS=1 cargo test -p qrm-cli --test reliability_table`).
+#![allow(clippy::unwrap_used)] // tests: a panic is the failure report
+
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Stdio};
+
+fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("..")
+}
+
+fn corpus(rel: &str) -> String {
+    std::fs::read_to_string(root().join("fuzz/corpus").join(rel)).unwrap()
+}
+
+/// How an input surface is fed: a file argument, a MRCLAM directory, or stdin.
+enum Feed {
+    File {
+        args: &'static [&'static str],
+        name: &'static str,
+    },
+    Mrclam,
+    Stdin(&'static [&'static str]),
+}
+
+struct Surface {
+    name: &'static str,
+    seed: String,
+    feed: Feed,
+    /// Whether the command takes `--out` (then a failure must leave no directory).
+    writes: bool,
+}
+
+fn surfaces() -> Vec<Surface> {
+    use Feed::{File, Mrclam, Stdin};
+    let s = |name, seed: &str, feed, writes| Surface {
+        name,
+        // The MRCLAM seed holds several files; the measurements (third part) are spoiled.
+        seed: match seed {
+            "mrclam/tiny.txt" => corpus(seed).split("\n%%\n").nth(2).unwrap().to_owned(),
+            _ => corpus(seed),
+        },
+        feed,
+        writes,
+    };
+    vec![
+        s(
+            "calculus spec (TOML)",
+            "spec_toml/double-cross.toml",
+            File {
+                args: &["calculus", "show", "{file}"],
+                name: "spec.toml",
+            },
+            false,
+        ),
+        s(
+            "calculus classify (stdin)",
+            "classify_row/row0.txt",
+            Stdin(&["calculus", "classify", "edc"]),
+            false,
+        ),
+        s(
+            "observation CSV",
+            "observation_csv/sim.csv",
+            File {
+                args: &[
+                    "map",
+                    "--format",
+                    "csv",
+                    "--input",
+                    "{file}",
+                    "--calculus",
+                    "left-right",
+                    "--samples",
+                    "50",
+                    "--out",
+                    "{out}",
+                ],
+                name: "obs.csv",
+            },
+            true,
+        ),
+        s(
+            "truth CSV",
+            "truth_csv/sim.csv",
+            File {
+                args: &[
+                    "map",
+                    "--format",
+                    "csv",
+                    "--input",
+                    "{good_csv}",
+                    "--truth",
+                    "{file}",
+                    "--calculus",
+                    "left-right",
+                    "--samples",
+                    "50",
+                    "--out",
+                    "{out}",
+                ],
+                name: "truth.csv",
+            },
+            true,
+        ),
+        s(
+            "g2o",
+            "g2o/small.g2o",
+            File {
+                args: &[
+                    "map",
+                    "--format",
+                    "g2o",
+                    "--input",
+                    "{file}",
+                    "--calculus",
+                    "left-right",
+                    "--samples",
+                    "50",
+                    "--out",
+                    "{out}",
+                ],
+                name: "data.g2o",
+            },
+            true,
+        ),
+        s("MRCLAM measurements", "mrclam/tiny.txt", Mrclam, true),
+        s(
+            "SERGE beliefs (JSON)",
+            "beliefs/mixed.json",
+            File {
+                args: &[
+                    "serge",
+                    "run",
+                    "--beliefs",
+                    "{file}",
+                    "--mu",
+                    "2",
+                    "--trials",
+                    "5",
+                    "--out",
+                    "{out}",
+                ],
+                name: "beliefs.json",
+            },
+            true,
+        ),
+        s(
+            "world file (TOML)",
+            "world/small.toml",
+            File {
+                args: &[
+                    "sim",
+                    "--scenario",
+                    "pqrm-100",
+                    "--no-lidar",
+                    "--world",
+                    "{file}",
+                    "--out",
+                    "{out}",
+                ],
+                name: "world.toml",
+            },
+            true,
+        ),
+        s(
+            "saved map (JSON)",
+            "saved_map/left-right.json",
+            File {
+                args: &["reason", "check", "{file}"],
+                name: "map.json",
+            },
+            false,
+        ),
+        s(
+            "pqrm prob line (stdin)",
+            "prob_line/readme.json",
+            Stdin(&[
+                "pqrm",
+                "prob",
+                "--calculus",
+                "left-right",
+                "--samples",
+                "100",
+            ]),
+            false,
+        ),
+        s(
+            "ternary network (stdin)",
+            "network/json.json",
+            Stdin(&["reason", "close", "--calculus", "double-cross"]),
+            false,
+        ),
+        s(
+            "binary network (stdin)",
+            "binary_network/sparq.lisp",
+            Stdin(&["reason", "close", "--calculus", "opra-1"]),
+            false,
+        ),
+    ]
+}
+
+/// The classes of bad input, each a transformation of a valid input.
+const CLASSES: [&str; 9] = [
+    "NaN",
+    "infinity",
+    "1e308",
+    "negative (-1)",
+    "empty",
+    "truncated",
+    "not the format",
+    "2 MB field",
+    "binary bytes",
+];
+
+/// The byte range of the last number in `text` (digits with sign, dot and exponent).
+fn last_number(text: &str) -> Option<(usize, usize)> {
+    let b = text.as_bytes();
+    let mut end = b.len();
+    while end > 0 && !b[end - 1].is_ascii_digit() {
+        end -= 1;
+    }
+    if end == 0 {
+        return None;
+    }
+    let mut start = end;
+    while start > 0 && (b[start - 1].is_ascii_digit() || b".eE+-".contains(&b[start - 1])) {
+        start -= 1;
+    }
+    Some((start, end))
+}
+
+fn apply(class: &str, seed: &str) -> Vec<u8> {
+    // The last number replaced; a text without numbers (a network of labels) gets the value
+    // where a label would be.
+    let replace = |with: &str| match last_number(seed) {
+        Some((s, e)) => format!("{}{with}{}", &seed[..s], &seed[e..]).into_bytes(),
+        None => seed.replacen("left-front", with, 1).into_bytes(),
+    };
+    match class {
+        "NaN" => replace("NaN"),
+        "infinity" => replace("inf"),
+        "1e308" => replace("1e308"),
+        "negative (-1)" => replace("-1"),
+        "empty" => Vec::new(),
+        "truncated" => seed.as_bytes()[..seed.len() / 2].to_vec(),
+        "not the format" => b"hello, this is a README\n".to_vec(),
+        "2 MB field" => replace(&"7".repeat(2 << 20)),
+        _ => vec![0xff, 0xfe, 0x00, 0x9c, b'\n', 0x80],
+    }
+}
+
+struct Outcome {
+    code: Option<i32>,
+    stderr: String,
+    stdout: String,
+    left_dir: bool,
+}
+
+fn run(surface: &Surface, input: &[u8], dir: &Path) -> Outcome {
+    let _ = std::fs::remove_dir_all(dir);
+    std::fs::create_dir_all(dir).unwrap();
+    let out = dir.join("out");
+    let good_csv = dir.join("good.csv");
+    std::fs::write(&good_csv, corpus("observation_csv/sim.csv")).unwrap();
+    let (args, stdin): (Vec<String>, Vec<u8>) = match &surface.feed {
+        Feed::File { args, name } => {
+            let file = dir.join(name);
+            std::fs::write(&file, input).unwrap();
+            let args = args
+                .iter()
+                .map(|a| {
+                    a.replace("{file}", file.to_str().unwrap())
+                        .replace("{out}", out.to_str().unwrap())
+                        .replace("{good_csv}", good_csv.to_str().unwrap())
+                })
+                .collect();
+            (args, Vec::new())
+        }
+        Feed::Mrclam => {
+            let data = dir.join("mrclam");
+            std::fs::create_dir_all(&data).unwrap();
+            let seed = corpus("mrclam/tiny.txt");
+            let parts: Vec<&str> = seed.split("\n%%\n").collect();
+            std::fs::write(data.join("Landmark_Groundtruth.dat"), parts[0]).unwrap();
+            std::fs::write(data.join("Barcodes.dat"), parts[1]).unwrap();
+            std::fs::write(data.join("Robot1_Measurement.dat"), input).unwrap();
+            let args = [
+                "map",
+                "--format",
+                "mrclam",
+                "--input",
+                data.to_str().unwrap(),
+                "--calculus",
+                "left-right",
+                "--samples",
+                "50",
+                "--out",
+                out.to_str().unwrap(),
+            ]
+            .map(str::to_owned)
+            .to_vec();
+            (args, Vec::new())
+        }
+        Feed::Stdin(args) => (
+            args.iter().map(|a| (*a).to_owned()).collect(),
+            input.to_vec(),
+        ),
+    };
+    let mut child = Command::new(env!("CARGO_BIN_EXE_qrm"))
+        .args(&args)
+        .env("QRM_CACHE_DIR", "")
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut pipe = child.stdin.take().unwrap();
+    let writer = std::thread::spawn(move || {
+        let _ = pipe.write_all(&stdin);
+    });
+    let o = child.wait_with_output().unwrap();
+    let _ = writer.join();
+    let shown = |b: &[u8]| String::from_utf8_lossy(b).replace(dir.to_str().unwrap(), "<dir>");
+    Outcome {
+        code: o.status.code(),
+        stderr: shown(&o.stderr),
+        stdout: shown(&o.stdout),
+        left_dir: out.exists(),
+    }
+}
+
+fn cell(o: &Outcome) -> String {
+    let first = o
+        .stderr
+        .lines()
+        .rev()
+        .find(|l| l.starts_with("error:"))
+        .unwrap_or("")
+        .trim_start_matches("error: ");
+    let mut msg: String = first.chars().take(110).collect();
+    if first.chars().count() > 110 {
+        msg.push('…');
+    }
+    let msg = msg.replace('|', "\\|").replace('`', "'");
+    match o.code {
+        Some(0) => "accepted".to_owned(),
+        Some(1) => format!("error: {msg}"),
+        other => format!("**exit {other:?}**"),
+    }
+}
+
+#[test]
+fn every_surface_meets_every_bad_input_with_a_typed_error_or_a_clean_result() {
+    let dir = std::env::temp_dir().join(format!("qrm-reliability-{}", std::process::id()));
+    let mut problems = Vec::new();
+    let mut doc = String::from(
+        "# Reliability: input surfaces × bad inputs\n\n\
+         Produced by `cli/tests/reliability_table.rs` (regenerate: `QRM_BLESS=1 cargo test -p \
+         qrm-cli --test reliability_table`); the test fails when the binary does anything else. \
+         Each cell is one run of the real `qrm` binary on a valid input (from `fuzz/corpus/`) \
+         spoiled one way: the last number replaced by NaN, `inf`, `1e308` or `-1`; the file \
+         empty, cut in half, replaced by prose, given a 2 MB number, or binary bytes. \
+         *accepted* means exit 0 with no NaN or infinity in the output (a large but finite \
+         value can be legitimate); *error* is exit 1 with the message shown (first 110 \
+         characters). Every failing run that takes `--out` is checked to leave no output \
+         directory. Deeper, in-process coverage: the fuzz targets in `fuzz/` \
+         (`tests/tests/fuzz_corpus.rs` runs them over their corpus and 5,000 mutations each).\n\n",
+    );
+    for s in surfaces() {
+        doc.push_str(&format!(
+            "## {}\n\n| bad input | outcome |\n|---|---|\n",
+            s.name
+        ));
+        for class in CLASSES {
+            let o = run(&s, &apply(class, &s.seed), &dir);
+            if o.stderr.contains("panicked") || !matches!(o.code, Some(0 | 1)) {
+                problems.push(format!(
+                    "{} / {class}: exit {:?}: {}",
+                    s.name, o.code, o.stderr
+                ));
+            }
+            if o.code != Some(0) && s.writes && o.left_dir {
+                problems.push(format!(
+                    "{} / {class}: failed but left an output directory",
+                    s.name
+                ));
+            }
+            if o.code == Some(0) {
+                let bad = o
+                    .stdout
+                    .split(|c: char| !(c.is_ascii_alphanumeric() || c == '-'))
+                    .any(|t| matches!(t, "NaN" | "inf" | "-inf"));
+                if bad {
+                    problems.push(format!(
+                        "{} / {class}: accepted with NaN/inf in the output",
+                        s.name
+                    ));
+                }
+            }
+            doc.push_str(&format!("| {class} | {} |\n", cell(&o)));
+        }
+        doc.push('\n');
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+    assert!(problems.is_empty(), "{}", problems.join("\n"));
+    let path = root().join("docs/reliability.md");
+    if std::env::var_os("QRM_BLESS").is_some() {
+        std::fs::write(&path, &doc).unwrap();
+    } else {
+        let committed = std::fs::read_to_string(&path).unwrap_or_default();
+        assert!(
+            committed == doc,
+            "docs/reliability.md is stale; regenerate with QRM_BLESS=1 cargo test -p qrm-cli \
+             --test reliability_table"
+        );
+    }
+}

@@ -1,0 +1,1 @@
+((A B (left-front left-middle) C) (B C right-back D))
