@@ -202,13 +202,17 @@ fn read_network(args: &NetworkArgs) -> Result<(String, String, NetworkFormat)> {
     let (origin, text) = match &args.input {
         Some(path) => (
             path.display().to_string(),
-            std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?,
+            qsr_core::text_file::read_text(path, qsr_core::text_file::MAX_INPUT_BYTES)
+                .with_context(|| format!("reading {}", path.display()))?,
         ),
         None => {
             let mut s = String::new();
+            let max = qsr_core::text_file::MAX_INPUT_BYTES;
             std::io::stdin()
+                .take(max + 1)
                 .read_to_string(&mut s)
                 .context("reading the network from stdin")?;
+            anyhow::ensure!(s.len() as u64 <= max, "stdin: more than {max} bytes");
             ("stdin".to_owned(), s)
         }
     };

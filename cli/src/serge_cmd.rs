@@ -156,7 +156,7 @@ fn draw_map(stem: &Path, title: &str, map: &SalientRegionMap, points: &[[f64; 2]
 
 fn run_map(a: RunArgs) -> Result<()> {
     // stage two: validate everything before any work
-    let text = std::fs::read_to_string(&a.beliefs)
+    let text = qsr_core::text_file::read_text(&a.beliefs, qsr_core::text_file::MAX_INPUT_BYTES)
         .with_context(|| format!("reading {}", a.beliefs.display()))?;
     let beliefs = BeliefSet::from_json_str(&text, &a.beliefs.display().to_string())?;
     let grid = match &a.window {

@@ -47,8 +47,8 @@ pub fn run(a: SimArgs) -> Result<()> {
     }
     let world = match &a.world {
         Some(p) => {
-            let text =
-                std::fs::read_to_string(p).with_context(|| format!("reading {}", p.display()))?;
+            let text = qsr_core::text_file::read_text(p, qsr_core::text_file::MAX_INPUT_BYTES)
+                .with_context(|| format!("reading {}", p.display()))?;
             let spec: sim2d::WorldSpec = toml::from_str(&text)
                 .with_context(|| format!("parsing world file {}", p.display()))?;
             Some(spec)

@@ -105,3 +105,43 @@ fn ctrl_c_stops_a_long_run_within_a_second_and_removes_its_output() {
     );
     let _ = std::fs::remove_dir_all(&d);
 }
+
+/// Regression (issue 17): `qrm sim --world /dev/zero` read forever until the OOM killer; a
+/// device or a directory given as an input file is now refused at once.
+#[test]
+fn devices_and_directories_are_refused_not_read_forever() {
+    let d = scratch("devices");
+    let out = d.join("out");
+    for args in [
+        vec!["sim", "--scenario", "pqrm-100", "--world", "/dev/zero"],
+        vec![
+            "map",
+            "--format",
+            "csv",
+            "--input",
+            "/dev/zero",
+            "--calculus",
+            "edc",
+        ],
+        vec![
+            "map",
+            "--format",
+            "g2o",
+            "--input",
+            "/tmp",
+            "--calculus",
+            "edc",
+        ],
+    ] {
+        let mut args = args.clone();
+        args.extend(["--out", out.to_str().unwrap()]);
+        let t0 = Instant::now();
+        let o = qrm(&args, "");
+        assert_eq!(o.status.code(), Some(1), "{args:?}");
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(err.contains("not a file"), "{args:?}: {err}");
+        assert!(t0.elapsed() < Duration::from_secs(5));
+        assert!(!out.exists());
+    }
+    let _ = std::fs::remove_dir_all(&d);
+}

@@ -52,9 +52,11 @@ impl RangeBearingNoise {
 }
 
 fn read(path: &Path) -> Result<String> {
-    std::fs::read_to_string(path).map_err(|source| PqrmError::Io {
-        path: path.to_path_buf(),
-        source,
+    qsr_core::text_file::read_text(path, qsr_core::text_file::MAX_INPUT_BYTES).map_err(|source| {
+        PqrmError::Io {
+            path: path.to_path_buf(),
+            source,
+        }
     })
 }
 

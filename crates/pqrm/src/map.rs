@@ -477,10 +477,11 @@ impl Pqrm {
     /// # Errors
     /// [`PqrmError::Io`], then as [`Pqrm::from_json`].
     pub fn load(path: &Path) -> Result<Self> {
-        let text = std::fs::read_to_string(path).map_err(|source| PqrmError::Io {
-            path: path.to_path_buf(),
-            source,
-        })?;
+        let text = qsr_core::text_file::read_text(path, qsr_core::text_file::MAX_INPUT_BYTES)
+            .map_err(|source| PqrmError::Io {
+                path: path.to_path_buf(),
+                source,
+            })?;
         // Name the file in format errors (the I/O error above names it already).
         Self::from_json(&text).map_err(|e| match e {
             PqrmError::Format(m) => PqrmError::Format(format!("{}: {m}", path.display())),

@@ -198,10 +198,12 @@ impl CalculusSpec {
     /// # Errors
     /// [`QsrError::Io`] when the file cannot be read, [`QsrError::Spec`] when it does not parse.
     pub fn from_path(path: &Path) -> Result<Self> {
-        let text = std::fs::read_to_string(path).map_err(|source| QsrError::Io {
-            path: path.to_path_buf(),
-            source,
-        })?;
+        let text = crate::text_file::read_text(path, crate::text_file::MAX_INPUT_BYTES).map_err(
+            |source| QsrError::Io {
+                path: path.to_path_buf(),
+                source,
+            },
+        )?;
         let is_json = path
             .extension()
             .is_some_and(|e| e.eq_ignore_ascii_case("json"));

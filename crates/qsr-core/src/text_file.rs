@@ -1,0 +1,48 @@
+//! Reading an input file as text, bounded: every file qrm reads goes through here, so a
+//! device (`/dev/zero`), a directory or a runaway file is an `io::Error` naming the cause,
+//! never an endless read or an allocation abort (issue 17).
+
+use std::io::Read;
+use std::path::Path;
+
+/// The largest input file read (1 GiB: MRCLAM's largest file is tens of MB).
+pub const MAX_INPUT_BYTES: u64 = 1 << 30;
+
+/// Reads `path` as UTF-8 text of at most `max_bytes` bytes.
+///
+/// # Errors
+/// `io::Error` when the file cannot be opened, is a directory or a device, is larger than
+/// `max_bytes`, or is not UTF-8.
+pub fn read_text(path: &Path, max_bytes: u64) -> std::io::Result<String> {
+    use std::io::{Error, ErrorKind};
+    let file = std::fs::File::open(path)?;
+    let meta = file.metadata()?;
+    if meta.is_dir() {
+        return Err(Error::new(
+            ErrorKind::InvalidInput,
+            "is a directory, not a file",
+        ));
+    }
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::FileTypeExt;
+        let t = meta.file_type();
+        if t.is_char_device() || t.is_block_device() {
+            return Err(Error::new(
+                ErrorKind::InvalidInput,
+                "is a device, not a file",
+            ));
+        }
+    }
+    let mut bytes = Vec::new();
+    file.take(max_bytes.saturating_add(1))
+        .read_to_end(&mut bytes)?;
+    if bytes.len() as u64 > max_bytes {
+        return Err(Error::new(
+            ErrorKind::InvalidData,
+            format!("larger than {max_bytes} bytes, the most an input file may be"),
+        ));
+    }
+    String::from_utf8(bytes)
+        .map_err(|_| Error::new(ErrorKind::InvalidData, "stream did not contain valid UTF-8"))
+}
