@@ -1,7 +1,7 @@
 //! `qrm calculus ...`: thin formatting over `qsr_core`.
 
 use std::collections::BTreeMap;
-use std::io::{BufRead, Write};
+use std::io::{BufRead, Read, Write};
 use std::path::PathBuf;
 
 use anyhow::{Context, Result, bail};
@@ -346,7 +346,9 @@ pub fn classify_stdin(
 ) -> Result<()> {
     let stdin = std::io::stdin();
     let mut labels = String::new();
-    for (i, line) in stdin.lock().lines().enumerate() {
+    // Capped like every input file: an endless line (`< /dev/zero`) ends instead of growing.
+    let capped = stdin.lock().take(qsr_core::text_file::MAX_INPUT_BYTES);
+    for (i, line) in capped.lines().enumerate() {
         let lineno = i + 1;
         let line = line.with_context(|| format!("reading stdin line {lineno}"))?;
         let text = line.trim();

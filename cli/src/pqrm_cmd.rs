@@ -1,7 +1,7 @@
 //! `qrm pqrm ...` and `qrm map`: thin formatting, plotting and reporting over `pqrm`.
 
 use std::fmt::Write as _;
-use std::io::{BufRead, Write};
+use std::io::{BufRead, Read, Write};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -42,7 +42,11 @@ fn prob(calculus: &str, samples: usize, seed: u64, floor: f64) -> Result<()> {
         "--floor must be finite and >= 0"
     );
     let mut out = String::new();
-    for (i, line) in std::io::stdin().lock().lines().enumerate() {
+    // Capped like every input file: an endless line (`< /dev/zero`) ends instead of growing.
+    let capped = std::io::stdin()
+        .lock()
+        .take(qsr_core::text_file::MAX_INPUT_BYTES);
+    for (i, line) in capped.lines().enumerate() {
         let lineno = i + 1;
         let line = line.with_context(|| format!("reading stdin line {lineno}"))?;
         if line.trim().is_empty() {
