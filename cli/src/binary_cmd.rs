@@ -140,34 +140,7 @@ fn classify(out: &mut impl Write, c: &BinaryCalculus) -> Result<()> {
 }
 
 fn neighbours(out: &mut impl Write, c: &BinaryCalculus, json: bool) -> Result<()> {
-    let g = c.neighbours()?;
-    if json {
-        let v = json!({
-            "states": c.labels(),
-            "adjacent": g.edges().iter().map(|(a, b)| [c.label(*a), c.label(*b)]).collect::<Vec<_>>(),
-            "distance": g.distance_matrix(),
-            "diameter": g.diameter(),
-        });
-        writeln!(out, "{}", serde_json::to_string(&v)?)?;
-        return Ok(());
-    }
-    writeln!(
-        out,
-        "{}: {} relations, {} adjacent pairs, diameter {:?}",
-        c.name(),
-        c.n_states(),
-        g.edges().len(),
-        g.diameter()
-    )?;
-    for s in c.states() {
-        writeln!(
-            out,
-            "  {:<12} {}",
-            c.label(s),
-            labels_of(c, &g.neighbours_of(s)).join(" ")
-        )?;
-    }
-    Ok(())
+    crate::calculus_cmd::write_neighbours(out, c.name(), c.labels(), c.neighbours()?, json)
 }
 
 fn compose(out: &mut impl Write, c: &BinaryCalculus, format: TableFormat) -> Result<()> {

@@ -371,11 +371,23 @@ pub fn classify_stdin(
 }
 
 fn neighbours(out: &mut impl Write, c: &Calculus, json: bool) -> Result<()> {
-    let g = c.neighbours();
+    write_neighbours(out, c.name(), c.labels(), c.neighbours(), json)
+}
+
+/// The neighbour graph as text (adjacency lists and the distance matrix) or JSON
+/// `{"states", "adjacent", "distance", "diameter"}`; shared by ternary and binary calculi.
+pub fn write_neighbours(
+    out: &mut impl Write,
+    name: &str,
+    labels: &[String],
+    g: &qsr_core::NeighbourGraph,
+    json: bool,
+) -> Result<()> {
+    let label = |s: &StateId| labels[s.index()].as_str();
     if json {
         let v = json!({
-            "states": c.labels(),
-            "adjacent": g.edges().iter().map(|(a, b)| [c.label(*a), c.label(*b)]).collect::<Vec<_>>(),
+            "states": labels,
+            "adjacent": g.edges().iter().map(|(a, b)| [label(a), label(b)]).collect::<Vec<_>>(),
             "distance": g.distance_matrix(),
             "diameter": g.diameter(),
         });
@@ -384,19 +396,15 @@ fn neighbours(out: &mut impl Write, c: &Calculus, json: bool) -> Result<()> {
     }
     writeln!(
         out,
-        "{}: {} states, {} adjacent pairs, diameter {:?}",
-        c.name(),
-        c.n_states(),
+        "{name}: {} states, {} adjacent pairs, diameter {:?}",
+        labels.len(),
         g.edges().len(),
         g.diameter()
     )?;
-    for s in c.states() {
-        writeln!(
-            out,
-            "  {:<16} {}",
-            c.label(s),
-            labels_of(c, &g.neighbours_of(s)).join(" ")
-        )?;
+    for (i, l) in labels.iter().enumerate() {
+        let s = StateId(u16::try_from(i).unwrap_or(u16::MAX));
+        let ns: Vec<&str> = g.neighbours_of(s).iter().map(label).collect();
+        writeln!(out, "  {l:<16} {}", ns.join(" "))?;
     }
     writeln!(out, "distance matrix (rows and columns in state order):")?;
     for row in g.distance_matrix() {

@@ -103,16 +103,7 @@ impl BinaryCalculus {
     fn neighbours<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, pyo3::types::PyDict>> {
         let c = &self.inner;
         let g = crate::pool::detach(py, || c.neighbours().cloned()).map_err(qsr)?;
-        let d = pyo3::types::PyDict::new(py);
-        d.set_item("states", c.labels().to_vec())?;
-        let adjacent: Vec<(String, String)> = g
-            .edges()
-            .iter()
-            .map(|(a, b)| (c.label(*a).to_owned(), c.label(*b).to_owned()))
-            .collect();
-        d.set_item("adjacent", adjacent)?;
-        d.set_item("distance", g.distance_matrix().to_vec())?;
-        Ok(d)
+        crate::calculus::neighbours_dict(py, c.labels(), &g)
     }
 
     /// The partition of directions as SVG text.

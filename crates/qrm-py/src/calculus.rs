@@ -231,21 +231,7 @@ impl Calculus {
     /// order, None for unconnected pairs).
     fn neighbours<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, pyo3::types::PyDict>> {
         let g = crate::pool::detach(py, || self.inner.neighbours().clone());
-        let d = pyo3::types::PyDict::new(py);
-        d.set_item("states", self.inner.labels().to_vec())?;
-        let adjacent: Vec<(String, String)> = g
-            .edges()
-            .iter()
-            .map(|(a, b)| {
-                (
-                    self.inner.label(*a).to_owned(),
-                    self.inner.label(*b).to_owned(),
-                )
-            })
-            .collect();
-        d.set_item("adjacent", adjacent)?;
-        d.set_item("distance", g.distance_matrix().to_vec())?;
-        Ok(d)
+        neighbours_dict(py, self.inner.labels(), &g)
     }
 
     /// Composition table {r: {s: [t, ...]}} of {AB:C} ∘ {BC:D} → {AB:D}; `generic=True` for
@@ -335,4 +321,22 @@ impl Calculus {
             self.inner.frame().as_str()
         )
     }
+}
+
+/// `{"states", "adjacent", "distance"}` of a neighbour graph (ternary and binary calculi).
+pub(crate) fn neighbours_dict<'py>(
+    py: Python<'py>,
+    labels: &[String],
+    g: &qsr_core::NeighbourGraph,
+) -> PyResult<Bound<'py, pyo3::types::PyDict>> {
+    let d = pyo3::types::PyDict::new(py);
+    d.set_item("states", labels.to_vec())?;
+    let adjacent: Vec<(String, String)> = g
+        .edges()
+        .iter()
+        .map(|(a, b)| (labels[a.index()].clone(), labels[b.index()].clone()))
+        .collect();
+    d.set_item("adjacent", adjacent)?;
+    d.set_item("distance", g.distance_matrix().to_vec())?;
+    Ok(d)
 }

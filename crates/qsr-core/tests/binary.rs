@@ -348,3 +348,14 @@ fn far_apart_reference_points_are_not_coincident_and_overflow_is_named() {
     );
     assert!(same.unwrap_err().to_string().contains("coincide"));
 }
+
+/// Regression: two disjoint sets given for one pair of a two-point network left that pair
+/// empty, and closure (with no third point to compose through) called the network consistent.
+#[test]
+fn a_pair_empty_as_given_is_inconsistent() {
+    let c = BinaryCalculus::builtin("opra-1").unwrap();
+    let net = BinaryNetwork::from_sparq_str(&c, "((A 1_3 B) (A 3_1 B))").unwrap();
+    let closed = close_binary(net).unwrap();
+    assert!(!closed.is_consistent());
+    assert!(closed.describe().unwrap().contains("given for A and B"));
+}

@@ -51,5 +51,8 @@ pub use calculus::{
 };
 pub use derive::ConverseTable;
 pub use direction::{DirectionPartition, RAY_TOLERANCE, TICKS_PER_UNIT};
-pub use network::{BinaryClosure, BinaryNetwork, MAX_BINARY_POINTS, close_binary, relation_set};
+pub use network::{
+    BinaryClosure, BinaryContradiction, BinaryNetwork, MAX_BINARY_POINTS, close_binary,
+    relation_set,
+};
 pub use picture::render_binary_svg;

@@ -400,13 +400,34 @@ impl BinaryNetwork {
     }
 }
 
+/// Why a binary network is inconsistent.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum BinaryContradiction {
+    /// The relation of `(a, b)` was empty as given (e.g. two disjoint sets for one pair).
+    Given {
+        /// First point.
+        a: usize,
+        /// Second point.
+        b: usize,
+    },
+    /// `R(a,b) ∩ R(a,via) ∘ R(via,b)` emptied during closure.
+    Composed {
+        /// First point.
+        a: usize,
+        /// The point in between.
+        via: usize,
+        /// Last point.
+        b: usize,
+    },
+}
+
 /// The outcome of [`close_binary`].
 #[derive(Debug, Clone)]
 pub struct BinaryClosure {
     /// The closed network (on a contradiction: as it stood when a set emptied).
     pub network: BinaryNetwork,
-    /// `(i, j, k)` when `R(i,k) ∩ R(i,j) ∘ R(j,k)` emptied: the network is inconsistent.
-    pub contradiction: Option<(usize, usize, usize)>,
+    /// Set when the network is inconsistent.
+    pub contradiction: Option<BinaryContradiction>,
     /// Sets narrowed.
     pub revisions: usize,
 }
@@ -418,15 +439,19 @@ impl BinaryClosure {
         self.contradiction.is_none()
     }
 
-    /// The contradiction in words, naming the three points.
+    /// The contradiction in words, naming the points.
     #[must_use]
     pub fn describe(&self) -> Option<String> {
-        self.contradiction.map(|(i, j, k)| {
-            let n = self.network.names();
-            format!(
+        let n = self.network.names();
+        self.contradiction.map(|c| match c {
+            BinaryContradiction::Given { a, b } => format!(
+                "the constraints given for {} and {} leave no relation (disjoint sets?)",
+                n[a], n[b]
+            ),
+            BinaryContradiction::Composed { a, via, b } => format!(
                 "no relation between {} and {} agrees with {}–{} and {}–{}",
-                n[i], n[k], n[i], n[j], n[j], n[k]
-            )
+                n[a], n[b], n[a], n[via], n[via], n[b]
+            ),
         })
     }
 }
@@ -466,6 +491,17 @@ pub fn close_binary(network: BinaryNetwork) -> crate::Result<BinaryClosure> {
     };
     let mut net = network;
     let n = net.n_points();
+    // A set empty as given is a contradiction even with no third point to compose through.
+    let empty = net
+        .pairs()
+        .find(|&(i, j)| net.words_of(i, j).iter().all(|w| *w == 0));
+    if let Some((a, b)) = empty {
+        return Ok(BinaryClosure {
+            network: net,
+            contradiction: Some(BinaryContradiction::Given { a, b }),
+            revisions: 0,
+        });
+    }
     let mut queue: std::collections::VecDeque<(usize, usize)> = net.pairs().collect();
     let mut queued = vec![true; n * n];
     let mut revisions = 0usize;
@@ -486,7 +522,7 @@ pub fn close_binary(network: BinaryNetwork) -> crate::Result<BinaryClosure> {
                     if new.iter().all(|w| *w == 0) {
                         return Ok(BinaryClosure {
                             network: net,
-                            contradiction: Some((x, via, y)),
+                            contradiction: Some(BinaryContradiction::Composed { a: x, via, b: y }),
                             revisions,
                         });
                     }
