@@ -27,6 +27,9 @@ pub enum Command {
     Map(MapArgs),
     /// Run a simulated scenario: MCAP log, observation CSV, world file, picture.
     Sim(crate::sim_cmd::SimArgs),
+    /// Write a recording (csv, mrclam, g2o) as MCAP: detections per robot and the surveyed
+    /// landmarks, for Foxglove and for `qrm map --format mcap`.
+    Convert(crate::convert_cmd::ConvertArgs),
     /// Salient region maps: learn partitions and calculi from beliefs (SERGE, chapter 3).
     #[command(subcommand)]
     Serge(crate::serge_cmd::SergeCmd),
@@ -66,6 +69,9 @@ pub enum PqrmCmd {
     /// Map a recorded dataset with every point calculus: PQRM vs per-frame baseline
     /// (the analogue of thesis §2.3.2, Figs 2.14–2.16).
     Real(RealArgs),
+    /// Merge maps of one calculus (e.g. one per robot) by adding their log-likelihoods: no
+    /// common frame needed.
+    Merge(MergeArgs),
 }
 
 /// `qrm pqrm study`.
@@ -126,15 +132,51 @@ pub struct RealArgs {
     pub out: PathBuf,
 }
 
+/// `qrm pqrm merge`.
+#[derive(Debug, clap::Args)]
+pub struct MergeArgs {
+    /// Saved maps (`map.json`) of one calculus.
+    #[arg(required = true, num_args = 2..)]
+    pub maps: Vec<PathBuf>,
+    /// Ground truth to score the merged map: a `landmark,x,y` CSV or a MRCLAM directory.
+    #[arg(long)]
+    pub truth: Option<PathBuf>,
+    /// The merged map to write.
+    #[arg(long)]
+    pub out: PathBuf,
+}
+
 /// `qrm map`.
 #[derive(Debug, clap::Args)]
 pub struct MapArgs {
-    /// Input format: csv, mrclam or g2o.
+    /// Input format: csv, mrclam, g2o or mcap (a ROS 2 bag or Foxglove/qrm MCAP log).
     #[arg(long)]
     pub format: String,
-    /// Input file (csv, g2o) or directory (mrclam).
+    /// Input file (csv, g2o, mcap) or directory (mrclam).
     #[arg(long)]
     pub input: PathBuf,
+    /// MCAP topic to read (repeatable); default: every qrm.LandmarkDetections topic, else the
+    /// one LaserScan topic.
+    #[arg(long)]
+    pub topic: Vec<String>,
+    /// MCAP lidar scans: returns beyond this many metres are no return (overrides the
+    /// message and channel metadata).
+    #[arg(long)]
+    pub range_max: Option<f32>,
+    /// MCAP lidar scans: position noise σ (m) of each extracted landmark.
+    #[arg(long, default_value_t = 0.1)]
+    pub lidar_sigma: f64,
+    /// MCAP: read a truncated or damaged file up to its last readable chunk (with a warning)
+    /// instead of failing.
+    #[arg(long)]
+    pub allow_truncated: bool,
+    /// Map only these robots' scans (comma-separated robot numbers, e.g. `1,2`).
+    #[arg(long, value_delimiter = ',')]
+    pub robots: Vec<u32>,
+    /// One map per robot: `robot{N}/map.json` and `robot{N}/summary.json` (merge them with
+    /// `qrm pqrm merge`).
+    #[arg(long)]
+    pub per_robot: bool,
     /// Calculus name or spec file.
     #[arg(long, default_value = "edc")]
     pub calculus: String,

@@ -17,8 +17,8 @@ use serde_json::{Value, json};
 use serge::learn::{TripletObservation, triplet_beliefs};
 use serge::{CellMasses, Grid, Serge, SergeParams};
 
-use crate::mcap_log::{McapLog, stamp, yaw};
 use crate::output::{Staging, write_atomic};
+use qrm_log::{McapLog, stamp, yaw};
 
 /// `qrm demo`.
 #[derive(Debug, clap::Args)]
@@ -337,7 +337,7 @@ fn write_log(
     goal: u32,
     t_map: f64,
 ) -> Result<()> {
-    let mut log = McapLog::create(&out_dir.join("run.mcap"))?;
+    let mut log = McapLog::robot(&out_dir.join("run.mcap"), Some((0.0, sc.lidar.max_range)))?;
     log.add_channel("/navigation", "foxglove.SceneUpdate", None)?;
     log.add_channel("/plan", "qrm.Plan", Some(PLAN_SCHEMA))?;
     log.add_channel("/map/beliefs", "qrm.MapBeliefs", Some(BELIEFS_SCHEMA))?;
@@ -429,5 +429,5 @@ fn write_log(
         t,
         &json!({"timestamp": stamp(t), "level": 2, "message": format!("navigation to landmark {goal}: {}", if outcome.success { "reached" } else { "failed" }), "name": "qrm demo", "file": "", "line": 0}),
     )?;
-    log.finish()
+    Ok(log.finish()?)
 }

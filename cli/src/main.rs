@@ -9,9 +9,9 @@
 mod args;
 mod binary_cmd;
 mod calculus_cmd;
+mod convert_cmd;
 mod demo_cmd;
 mod field_cmd;
-mod mcap_log;
 mod output;
 mod plot;
 mod pqrm_cmd;
@@ -34,6 +34,7 @@ fn main() -> ExitCode {
         args::Command::Pqrm(cmd) => pqrm_cmd::run(cmd),
         args::Command::Map(a) => pqrm_cmd::map(a),
         args::Command::Sim(a) => sim_cmd::run(a),
+        args::Command::Convert(a) => convert_cmd::run(a),
         args::Command::Serge(cmd) => serge_cmd::run(cmd),
         args::Command::Qlink(cmd) => qlink_cmd::run(cmd),
         args::Command::Demo(a) => demo_cmd::run(a),

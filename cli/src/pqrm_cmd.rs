@@ -15,7 +15,7 @@ use pqrm::{Orderings, Pqrm, PqrmConfig, evaluate};
 use qsr_core::Calculus;
 use serde_json::json;
 
-use crate::args::{MapArgs, PqrmCmd, RealArgs, StudyArgs};
+use crate::args::{MapArgs, MergeArgs, PqrmCmd, RealArgs, StudyArgs};
 use crate::output::{Staging, write_atomic};
 use crate::plot::{self, Series};
 
@@ -30,6 +30,7 @@ pub fn run(cmd: PqrmCmd) -> Result<()> {
         } => prob(&calculus, samples, seed, floor),
         PqrmCmd::Study(a) => study(a),
         PqrmCmd::Real(a) => real(a),
+        PqrmCmd::Merge(a) => merge(a),
     }
 }
 
@@ -78,7 +79,8 @@ pub(crate) fn load_dataset(
         "csv" => read_csv(input)?,
         "mrclam" => read_mrclam(input, noise)?,
         "g2o" => read_g2o(input)?,
-        other => bail!("unknown --format `{other}` (csv, mrclam, g2o)"),
+        "mcap" => qrm_log::read_mcap(input, &qrm_log::ReadOptions::default())?.dataset,
+        other => bail!("unknown --format `{other}` (csv, mrclam, g2o, mcap)"),
     })
 }
 
@@ -102,53 +104,194 @@ pub fn map(a: MapArgs) -> Result<()> {
         sigma_range: a.sigma_range,
         sigma_bearing: a.sigma_bearing,
     };
-    // The loaders' errors name the file and line themselves.
-    let mut data = load_dataset(&a.format, &a.input, noise)?;
+    // The loaders' errors name the file and line (or topic, message and field) themselves.
+    let mut log_read = None;
+    let mut data = if a.format == "mcap" {
+        let mut options = qrm_log::ReadOptions {
+            topics: a.topic.clone(),
+            range_max: a.range_max,
+            allow_truncated: a.allow_truncated,
+            ..Default::default()
+        };
+        options.lidar.sigma = a.lidar_sigma;
+        let r = qrm_log::read_mcap(&a.input, &options)?;
+        if let Some(d) = &r.damage {
+            eprintln!(
+                "warning: {} is damaged; read up to its last readable chunk ({d})",
+                a.input.display()
+            );
+        }
+        let data = r.dataset.clone();
+        log_read = Some(r);
+        data
+    } else {
+        ensure!(
+            a.topic.is_empty() && a.range_max.is_none() && !a.allow_truncated,
+            "--topic, --range-max and --allow-truncated are for --format mcap"
+        );
+        load_dataset(&a.format, &a.input, noise)?
+    };
     if let Some(t) = &a.truth {
         data.truth = Some(read_truth_csv(t)?);
     }
-    let mut map = Pqrm::new(calc, config)?;
+    if !a.robots.is_empty() {
+        let present: std::collections::BTreeSet<u32> = data.scans.iter().map(|s| s.robot).collect();
+        if let Some(r) = a.robots.iter().find(|r| !present.contains(r)) {
+            bail!(
+                "--robots: robot {r} has no scans in {} (robots present: {present:?})",
+                a.input.display()
+            );
+        }
+        data.scans.retain(|s| a.robots.contains(&s.robot));
+    }
+    // What the log reader did goes into every summary.
+    let mut extra = serde_json::Map::new();
+    if let Some(r) = &log_read {
+        let used: Vec<_> = r
+            .topics
+            .iter()
+            .filter(|t| t.used)
+            .map(|t| json!({"topic": t.topic, "schema": t.schema, "messages": t.messages, "robot": t.robot}))
+            .collect();
+        extra.insert("topics".into(), json!(used));
+        extra.insert(
+            "landmarks_from".into(),
+            json!(if r.from_scans {
+                "lidar scans (extracted, recognised by triangles)"
+            } else {
+                "detections"
+            }),
+        );
+        extra.insert("damage".into(), json!(r.damage));
+    }
+    // Written into a staging directory, moved into place only when all is done: a
+    // failure or Ctrl-C leaves nothing a user could take for a result.
+    let stage = Staging::new(&a.out)?;
+    let out_dir = stage.path().to_path_buf();
+    let summary = if a.per_robot {
+        let robots: std::collections::BTreeSet<u32> = data.scans.iter().map(|s| s.robot).collect();
+        let mut all = serde_json::Map::new();
+        for r in robots {
+            let dir = out_dir.join(format!("robot{r}"));
+            std::fs::create_dir_all(&dir).with_context(|| format!("creating {}", dir.display()))?;
+            let one = Dataset {
+                scans: data
+                    .scans
+                    .iter()
+                    .filter(|s| s.robot == r)
+                    .cloned()
+                    .collect(),
+                truth: data.truth.clone(),
+                skipped: 0,
+            };
+            let s = map_into(
+                &dir,
+                &one,
+                &calc,
+                config,
+                &extra,
+                &format!("mapping robot {r}"),
+            )?;
+            all.insert(format!("robot{r}"), s);
+        }
+        serde_json::Value::Object(all)
+    } else {
+        map_into(&out_dir, &data, &calc, config, &extra, "mapping")?
+    };
+    println!("{}", serde_json::to_string_pretty(&summary)?);
+    stage.commit()?;
+    Ok(())
+}
+
+/// Maps `data` into `dir`: `map.json` and `summary.json` (scored when the data has a truth).
+fn map_into(
+    dir: &Path,
+    data: &Dataset,
+    calc: &Calculus,
+    config: PqrmConfig,
+    extra: &serde_json::Map<String, serde_json::Value>,
+    label: &str,
+) -> Result<serde_json::Value> {
+    let mut map = Pqrm::new(calc.clone(), config)?;
     let start = Instant::now();
-    let pb = crate::progress::bar(data.scans.len() as u64, "mapping");
+    let pb = crate::progress::bar(data.scans.len() as u64, label);
     for scan in &data.scans {
         map.update(scan)?;
         pb.inc(1);
     }
     pb.finish_and_clear();
-    // Written into a staging directory, moved into place only when all is done: a
-    // failure or Ctrl-C leaves nothing a user could take for a result.
-    let stage = Staging::new(&a.out)?;
-    let out_dir = stage.path().to_path_buf();
-    map.save(&out_dir.join("map.json"))?;
+    map.save(&dir.join("map.json"))?;
+    let robots: std::collections::BTreeSet<u32> = data.scans.iter().map(|s| s.robot).collect();
     let mut summary = json!({
         "calculus": map.calculus().name(),
         "n_scans": data.scans.len(),
+        "robots": robots,
         "skipped_measurements": data.skipped,
         "n_sets": map.len(),
         "mean_entropy": map.mean_entropy(),
         "seconds": start.elapsed().as_secs_f64(),
     });
+    let obj = summary.as_object_mut().context("summary is an object")?;
+    for (k, v) in extra {
+        obj.insert(k.clone(), v.clone());
+    }
     if let Some(truth) = &data.truth
         && !map.is_empty()
     {
-        let m = evaluate(&map, truth)?;
-        let obj = summary.as_object_mut().context("summary is an object")?;
-        obj.insert("n_scored".into(), json!(m.n_scored));
-        obj.insert("error_rate".into(), json!(m.error_rate));
-        obj.insert(
-            "mean_neighbor_distance".into(),
-            json!(m.mean_neighbor_distance),
-        );
-        obj.insert("p_ml_mean".into(), json!(m.p_ml_mean));
-        obj.insert("top_n_error".into(), json!(m.top_n_error));
-        obj.insert("normalized_entropy".into(), json!(m.normalized_entropy));
+        score_into(obj, &evaluate(&map, truth)?);
     }
     write_atomic(
-        &out_dir.join("summary.json"),
+        &dir.join("summary.json"),
         serde_json::to_string_pretty(&summary)?.as_bytes(),
     )?;
+    Ok(summary)
+}
+
+fn score_into(obj: &mut serde_json::Map<String, serde_json::Value>, m: &pqrm::MapMetrics) {
+    obj.insert("n_scored".into(), json!(m.n_scored));
+    obj.insert("error_rate".into(), json!(m.error_rate));
+    obj.insert(
+        "mean_neighbor_distance".into(),
+        json!(m.mean_neighbor_distance),
+    );
+    obj.insert("p_ml_mean".into(), json!(m.p_ml_mean));
+    obj.insert("top_n_error".into(), json!(m.top_n_error));
+    obj.insert("normalized_entropy".into(), json!(m.normalized_entropy));
+}
+
+/// `qrm pqrm merge`.
+fn merge(a: MergeArgs) -> Result<()> {
+    let maps = a
+        .maps
+        .iter()
+        .map(|p| Pqrm::load(p).with_context(|| format!("loading the map {}", p.display())))
+        .collect::<Result<Vec<_>>>()?;
+    let truth = match &a.truth {
+        Some(t) if t.is_dir() => Some(
+            read_mrclam(t, RangeBearingNoise::MRCLAM)?
+                .truth
+                .with_context(|| format!("{} has no surveyed landmarks", t.display()))?,
+        ),
+        Some(t) => Some(read_truth_csv(t)?),
+        None => None,
+    };
+    let merged =
+        pqrm::robots::merge_maps(&maps).with_context(|| format!("merging {} maps", maps.len()))?;
+    let mut summary = json!({
+        "calculus": merged.calculus().name(),
+        "maps": a.maps.iter().map(|p| p.display().to_string()).collect::<Vec<_>>(),
+        "sets_per_map": maps.iter().map(Pqrm::len).collect::<Vec<_>>(),
+        "n_sets": merged.len(),
+        "mean_entropy": merged.mean_entropy(),
+    });
+    if let Some(truth) = &truth
+        && !merged.is_empty()
+    {
+        let obj = summary.as_object_mut().context("summary is an object")?;
+        score_into(obj, &evaluate(&merged, truth)?);
+    }
+    write_atomic(&a.out, merged.to_json()?.as_bytes())?;
     println!("{}", serde_json::to_string_pretty(&summary)?);
-    stage.commit()?;
     Ok(())
 }
 
@@ -693,8 +836,31 @@ fn real(a: RealArgs) -> Result<()> {
     let start = Instant::now();
     let results = run_real(&data, &calculi, config, &|| pb.inc(1))?;
     pb.finish_and_clear();
+    // Many robots, one map: each alone, pooled, merged (when the recording has several).
+    let n_robots = data
+        .scans
+        .iter()
+        .map(|s| s.robot)
+        .collect::<std::collections::BTreeSet<_>>()
+        .len();
+    let robots = if n_robots >= 2 {
+        let calcs = calculi
+            .iter()
+            .map(|c| Calculus::resolve(c))
+            .collect::<std::result::Result<Vec<_>, _>>()?;
+        let pb = crate::progress::bar(
+            (2 * data.scans.len() * calcs.len()) as u64,
+            "robots alone, pooled, merged",
+        );
+        let r = pqrm::robots::compare_robots(&data, &calcs, config, &|| pb.inc(1))?;
+        pb.finish_and_clear();
+        r
+    } else {
+        Vec::new()
+    };
     let secs = start.elapsed().as_secs_f64();
     write_real(&out_dir, &results, &check, data.scans.len(), noise, secs)?;
+    write_robots(&out_dir, &robots)?;
     println!(
         "{:<14} {:>6} {:>9} {:>9} {:>9} {:>9} {:>9}",
         "calculus", "sets", "entropy", "err", "frame err", "nd", "random"
@@ -718,6 +884,86 @@ fn real(a: RealArgs) -> Result<()> {
         a.out.display()
     );
     stage.commit()?;
+    Ok(())
+}
+
+/// `robots.csv`, `robots.json` and the "Many robots" section appended to `report.md`.
+fn write_robots(out: &Path, robots: &[pqrm::robots::RobotComparison]) -> Result<()> {
+    if robots.is_empty() {
+        return Ok(());
+    }
+    write_atomic(
+        &out.join("robots.json"),
+        serde_json::to_string_pretty(robots)?.as_bytes(),
+    )?;
+    let mut csv = String::from(
+        "calculus,map,scans,sets,error_rate,mean_entropy,p_ml_mean,merged_error_on_same_sets\n",
+    );
+    let mut md = String::from(
+        "\n## Many robots, one map\n\nEach robot mapped alone, all robots' scans through one filter (pooled), and the robots' maps merged \
+         by adding log-likelihoods (`qrm pqrm merge`; no common frame needed). A single robot sees fewer triplets, so its error is \
+         compared with the merged map's error *on the same triplets*. Agreement: the share of triplets whose most likely state is \
+         the same in the merged and pooled maps; TV: their mean total-variation distance (0 = identical beliefs; the rest is \
+         sampling noise, the two filters draw different samples).\n\n\
+         | calculus | best robot: error (merged, same sets) | pooled error | merged error | merged vs pooled: agreement, TV | mean entropy pooled / merged | P(ML) pooled / merged | merged beats the best robot |\n|---|---|---|---|---|---|---|---|\n",
+    );
+    for r in robots {
+        for row in &r.robots {
+            writeln!(
+                csv,
+                "{},robot{},{},{},{:.4},{:.4},{:.4},{:.4}",
+                r.calculus,
+                row.robot,
+                row.scans,
+                row.metrics.n_sets,
+                row.metrics.error_rate,
+                row.metrics.mean_entropy,
+                row.metrics.p_ml_mean,
+                row.merged_error_on_these_sets
+            )?;
+        }
+        for (name, m) in [("pooled", &r.pooled), ("merged", &r.merged)] {
+            writeln!(
+                csv,
+                "{},{name},,{},{:.4},{:.4},{:.4},",
+                r.calculus, m.n_sets, m.error_rate, m.mean_entropy, m.p_ml_mean
+            )?;
+        }
+        let best = r
+            .robots
+            .iter()
+            .min_by(|a, b| a.metrics.error_rate.total_cmp(&b.metrics.error_rate));
+        let best = best.map_or("-".to_owned(), |b| {
+            format!(
+                "robot {}: {:.3} ({:.3})",
+                b.robot, b.metrics.error_rate, b.merged_error_on_these_sets
+            )
+        });
+        writeln!(
+            md,
+            "| {} | {best} | {:.3} | {:.3} | {:.1} %, {:.3} | {:.3} / {:.3} | {:.3} / {:.3} | {} |",
+            r.calculus,
+            r.pooled.error_rate,
+            r.merged.error_rate,
+            100.0 * r.ml_agreement,
+            r.mean_total_variation,
+            r.pooled.mean_entropy,
+            r.merged.mean_entropy,
+            r.pooled.p_ml_mean,
+            r.merged.p_ml_mean,
+            if r.merged_beats_best_robot {
+                "yes"
+            } else {
+                "**no**"
+            }
+        )?;
+    }
+    write_atomic(&out.join("robots.csv"), csv.as_bytes())?;
+    let report = out.join("report.md");
+    let mut text = std::fs::read_to_string(&report)
+        .with_context(|| format!("reading {}", report.display()))?;
+    text.push_str(&md);
+    write_atomic(&report, text.as_bytes())?;
     Ok(())
 }
 

@@ -6,8 +6,8 @@ use std::path::PathBuf;
 use anyhow::{Context, Result, bail};
 use serde_json::json;
 
-use crate::mcap_log::{McapLog, stamp, yaw};
 use crate::output::{Staging, write_atomic};
+use qrm_log::{McapLog, stamp, yaw};
 
 /// Raw flags of `qrm sim`.
 #[derive(Debug, clap::Args)]
@@ -101,7 +101,7 @@ pub fn run(a: SimArgs) -> Result<()> {
         truth_csv.push_str(&format!("{id},{},{}\n", p[0], p[1]));
     }
     write_atomic(&out_dir.join("truth.csv"), truth_csv.as_bytes())?;
-    write_log(&out_dir.join("run.mcap"), &sc, &frames)?;
+    write_log(&out_dir.join("run.mcap"), &sc, &frames, &truth)?;
     let traj: Vec<(f64, f64)> = frames.iter().map(|f| (f.pose.x, f.pose.y)).collect();
     let rays: Vec<crate::plot::Segment> = frames
         .iter()
@@ -140,15 +140,28 @@ pub fn run(a: SimArgs) -> Result<()> {
     Ok(())
 }
 
-fn write_log(path: &std::path::Path, sc: &sim2d::Scenario, frames: &[sim2d::Frame]) -> Result<()> {
-    let mut log = McapLog::create(path)?;
+fn write_log(
+    path: &std::path::Path,
+    sc: &sim2d::Scenario,
+    frames: &[sim2d::Frame],
+    truth: &std::collections::BTreeMap<u32, [f64; 2]>,
+) -> Result<()> {
+    let mut log = McapLog::robot(path, Some((0.0, sc.lidar.max_range)))?;
+    // The surveyed positions of the detections' ids, so `qrm map --format mcap` scores itself.
+    log.add_metadata(
+        qrm_log::TRUTH_METADATA,
+        truth
+            .iter()
+            .map(|(id, p)| (id.to_string(), format!("{},{}", p[0], p[1])))
+            .collect(),
+    )?;
     write_world(&mut log, sc)?;
     for f in frames {
         write_frame(&mut log, sc, f)?;
     }
     let t_end = frames.last().map_or(0.0, |f| f.t);
     log.write("/log", t_end, &json!({"timestamp": stamp(t_end), "level": 2, "message": format!("{} frames", frames.len()), "name": "qrm sim", "file": "", "line": 0}))?;
-    log.finish()
+    Ok(log.finish()?)
 }
 
 /// The world (landmarks, walls, clutter) on `/world` and a start event on `/log`, at t = 0.
@@ -206,17 +219,18 @@ pub fn write_frame(log: &mut McapLog, sc: &sim2d::Scenario, f: &sim2d::Frame) ->
         log.write(
             "/detections",
             f.t,
-            &json!({"timestamp": stamp(f.t), "frame_id": "base_link", "detections": dets}),
+            &json!({"timestamp": stamp(f.t), "t": f.t, "frame_id": "base_link", "detections": dets}),
         )?;
         if let Some(scan) = &f.scan {
-            // JSON has no infinity: no return is reported as max range + 1, outside
-            // [range_min, range_max] as Foxglove expects.
+            // JSON has no infinity: no return is reported as max range + 1, beyond the
+            // channel's `range_max`. Ranges are rounded to f32, what ROS carries and a lidar
+            // resolves, so a ROS 2 bag of the same run holds the same numbers.
             let ranges: Vec<f64> = scan
                 .ranges
                 .iter()
                 .map(|r| {
                     if r.is_finite() {
-                        *r
+                        f64::from(*r as f32)
                     } else {
                         sc.lidar.max_range + 1.0
                     }

@@ -407,3 +407,134 @@ fn the_real_data_study_runs_on_a_subset() {
     );
     std::fs::remove_dir_all(&out).ok();
 }
+
+#[test]
+fn per_robot_maps_merge_into_the_pooled_map() {
+    let Some(data) = mrclam() else {
+        eprintln!("SKIPPED: shared/data/mrclam-dataset7 not found");
+        return;
+    };
+    let out = tmp("robots");
+    let s = |p: &Path| p.to_str().unwrap().to_owned();
+    let d = s(&data);
+    let per = out.join("per");
+    let summary = ok(
+        &[
+            "map",
+            "--format",
+            "mrclam",
+            "--input",
+            &d,
+            "--samples",
+            "300",
+            "--per-robot",
+            "--out",
+            &s(&per),
+        ],
+        "",
+    );
+    let per_robot: serde_json::Value = serde_json::from_str(&summary).unwrap();
+    assert_eq!(per_robot.as_object().unwrap().len(), 5, "{summary}");
+    let pooled = out.join("pooled");
+    ok(
+        &[
+            "map",
+            "--format",
+            "mrclam",
+            "--input",
+            &d,
+            "--samples",
+            "300",
+            "--out",
+            &s(&pooled),
+        ],
+        "",
+    );
+    let maps: Vec<String> = (1..=5)
+        .map(|r| s(&per.join(format!("robot{r}/map.json"))))
+        .collect();
+    let merged = out.join("merged.json");
+    let mut args = vec!["pqrm", "merge"];
+    args.extend(maps.iter().map(String::as_str));
+    let merged_s = s(&merged);
+    args.extend(["--truth", &d, "--out", &merged_s]);
+    let m: serde_json::Value = serde_json::from_str(&ok(&args, "")).unwrap();
+    let p: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(pooled.join("summary.json")).unwrap())
+            .unwrap();
+    assert_eq!(m["n_sets"], p["n_sets"]);
+    let (em, ep) = (
+        m["error_rate"].as_f64().unwrap(),
+        p["error_rate"].as_f64().unwrap(),
+    );
+    assert!((em - ep).abs() < 0.02, "merged {em} vs pooled {ep}");
+    // The merged map is a map: it loads and can be merged again.
+    ok(&["reason", "check", &merged_s], "");
+    // --robots keeps only those robots' scans.
+    let two = ok(
+        &[
+            "map",
+            "--format",
+            "mrclam",
+            "--input",
+            &d,
+            "--samples",
+            "100",
+            "--robots",
+            "1,2",
+            "--out",
+            &s(&out.join("two")),
+        ],
+        "",
+    );
+    assert!(two.contains("\"robots\": [\n    1,\n    2\n  ]"), "{two}");
+    let o = qrm(
+        &[
+            "map",
+            "--format",
+            "mrclam",
+            "--input",
+            &d,
+            "--robots",
+            "9",
+            "--out",
+            &s(&out.join("nine")),
+        ],
+        "",
+    );
+    assert!(String::from_utf8_lossy(&o.stderr).contains("robot 9 has no scans"));
+    // Maps of different calculi do not merge.
+    let lr = out.join("lr");
+    ok(
+        &[
+            "map",
+            "--format",
+            "mrclam",
+            "--input",
+            &d,
+            "--samples",
+            "100",
+            "--calculus",
+            "left-right",
+            "--robots",
+            "1",
+            "--out",
+            &s(&lr),
+        ],
+        "",
+    );
+    let o = qrm(
+        &[
+            "pqrm",
+            "merge",
+            &maps[0],
+            &s(&lr.join("map.json")),
+            "--out",
+            &s(&out.join("x.json")),
+        ],
+        "",
+    );
+    assert_eq!(o.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("cannot merge"));
+    std::fs::remove_dir_all(&out).ok();
+}

@@ -29,7 +29,7 @@ enum Feed {
 
 struct Surface {
     name: &'static str,
-    seed: String,
+    seed: Vec<u8>,
     feed: Feed,
     /// Whether the command takes `--out` (then a failure must leave no directory).
     writes: bool,
@@ -41,8 +41,13 @@ fn surfaces() -> Vec<Surface> {
         name,
         // The MRCLAM seed holds several files; the measurements (third part) are spoiled.
         seed: match seed {
-            "mrclam/tiny.txt" => corpus(seed).split("\n%%\n").nth(2).unwrap().to_owned(),
-            _ => corpus(seed),
+            "mrclam/tiny.txt" => corpus(seed)
+                .split("\n%%\n")
+                .nth(2)
+                .unwrap()
+                .as_bytes()
+                .to_vec(),
+            _ => std::fs::read(root().join("fuzz/corpus").join(seed)).unwrap(),
         },
         feed,
         writes,
@@ -190,6 +195,46 @@ fn surfaces() -> Vec<Surface> {
             false,
         ),
         s(
+            "MCAP log (detections)",
+            "mcap/detections.mcap",
+            File {
+                args: &[
+                    "map",
+                    "--format",
+                    "mcap",
+                    "--input",
+                    "{file}",
+                    "--calculus",
+                    "left-right",
+                    "--samples",
+                    "50",
+                    "--out",
+                    "{out}",
+                ],
+                name: "run.mcap",
+            },
+            true,
+        ),
+        s(
+            "MCAP log (ROS 2 LaserScan)",
+            "mcap/ros2_laserscan.mcap",
+            File {
+                args: &[
+                    "map",
+                    "--format",
+                    "mcap",
+                    "--input",
+                    "{file}",
+                    "--samples",
+                    "50",
+                    "--out",
+                    "{out}",
+                ],
+                name: "bag.mcap",
+            },
+            true,
+        ),
+        s(
             "ternary network (stdin)",
             "network/json.json",
             Stdin(&["reason", "close", "--calculus", "double-cross"]),
@@ -234,7 +279,30 @@ fn last_number(text: &str) -> Option<(usize, usize)> {
     Some((start, end))
 }
 
-fn apply(class: &str, seed: &str) -> Vec<u8> {
+fn apply(class: &str, seed: &[u8]) -> Vec<u8> {
+    // A binary seed (an MCAP log): the same classes on its bytes. The last number sits in
+    // the last message's JSON; changing its length also breaks the record's length field,
+    // so these runs test a damaged log as much as a bad value.
+    let Ok(seed) = std::str::from_utf8(seed) else {
+        let at = seed.iter().rposition(u8::is_ascii_digit).unwrap_or(0);
+        let mut start = at;
+        while start > 0 && (seed[start - 1].is_ascii_digit() || b".eE+-".contains(&seed[start - 1]))
+        {
+            start -= 1;
+        }
+        let replace = |with: &[u8]| [&seed[..start], with, &seed[at + 1..]].concat();
+        return match class {
+            "NaN" => replace(b"NaN"),
+            "infinity" => replace(b"inf"),
+            "1e308" => replace(b"1e308"),
+            "negative (-1)" => replace(b"-1"),
+            "empty" => Vec::new(),
+            "truncated" => seed[..seed.len() / 2].to_vec(),
+            "not the format" => b"hello, this is a README\n".to_vec(),
+            "2 MB field" => replace("7".repeat(2 << 20).as_bytes()),
+            _ => vec![0xff, 0xfe, 0x00, 0x9c, b'\n', 0x80],
+        };
+    };
     // The last number replaced; a text without numbers (a network of labels) gets the value
     // where a label would be.
     let replace = |with: &str| match last_number(seed) {

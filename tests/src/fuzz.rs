@@ -18,7 +18,7 @@ use qsr_core::{Calculus, Point2};
 pub type Target = fn(&[u8]);
 
 /// Every target by name (the names of `fuzz/fuzz_targets/*.rs` and `fuzz/corpus/*/`).
-pub const TARGETS: [(&str, Target); 13] = [
+pub const TARGETS: [(&str, Target); 14] = [
     ("spec_toml", spec_toml),
     ("spec_json", spec_json),
     ("classify_row", classify_row),
@@ -32,6 +32,7 @@ pub const TARGETS: [(&str, Target); 13] = [
     ("prob_line", prob_line),
     ("network", network),
     ("binary_network", binary_network),
+    ("mcap", mcap),
 ];
 
 /// Panics when a `Debug` rendering holds a NaN or an infinity.
@@ -127,6 +128,21 @@ pub fn truth_csv(data: &[u8]) {
         && let Ok(g) = parse_truth_csv(t, Path::new("truth.csv"))
     {
         assert_finite("truth CSV", &g);
+    }
+}
+
+/// An MCAP log (ROS 2 bag, Foxglove or qrm log), read as `qrm map --format mcap` reads it:
+/// topics chosen by the reader, a named scan topic, and a truncated file allowed.
+pub fn mcap(data: &[u8]) {
+    let path = Path::new("fuzz.mcap");
+    for options in [
+        qrm_log::ReadOptions::default(),
+        qrm_log::ReadOptions::default().with_topic("/scan"),
+        qrm_log::ReadOptions::default().allowing_truncated(),
+    ] {
+        if let Ok(r) = qrm_log::read_mcap_bytes(data, path, &options) {
+            assert_finite("mcap", &r.dataset);
+        }
     }
 }
 

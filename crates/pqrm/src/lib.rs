@@ -44,6 +44,7 @@ pub mod metrics;
 pub mod observation;
 pub mod reason;
 pub mod reason_study;
+pub mod robots;
 pub mod sampler;
 pub mod study;
 

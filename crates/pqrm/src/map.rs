@@ -218,6 +218,12 @@ impl Pqrm {
         self.beliefs.is_empty()
     }
 
+    /// The belief of one set, if recorded.
+    #[must_use]
+    pub fn get(&self, set: &LandmarkSet) -> Option<&TripletBelief> {
+        self.beliefs.get(set)
+    }
+
     /// Recorded sets and their beliefs, in set order.
     pub fn iter(&self) -> impl Iterator<Item = (&LandmarkSet, &TripletBelief)> {
         self.beliefs.iter()

@@ -160,6 +160,18 @@ pub(crate) fn pqrm(e: PqrmError) -> PyErr {
     }
 }
 
+/// The Python exception for a robot-log error: the file is broken → `FormatError`; the file
+/// is fine but not what was asked (topic, schema, values) → `InvalidInput`.
+pub(crate) fn log(e: qrm_log::LogError) -> PyErr {
+    use qrm_log::LogError as L;
+    let msg = chain(&e);
+    match e {
+        L::Io { .. } | L::Write { .. } => io_error(msg),
+        L::Damaged { .. } | L::Message { .. } => FormatError::new_err(msg),
+        _ => InvalidInput::new_err(msg),
+    }
+}
+
 fn io_error(msg: String) -> PyErr {
     IoError::new_err(msg)
 }

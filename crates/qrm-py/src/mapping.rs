@@ -256,33 +256,65 @@ impl Pqrm {
     }
 }
 
-/// Reads an observation file: `format` is "csv", "mrclam" (a directory) or "g2o". Returns
-/// (scans, truth): each scan a dict {"t", "robot", "ids", "xy", "cov"} of NumPy arrays, truth
-/// a dict {landmark: (x, y)} or None.
+/// Reads an observation file: `format` is "csv", "mrclam" (a directory), "g2o" or "mcap" (a
+/// ROS 2 bag or Foxglove/qrm log; `topic` is one topic or a list, default: every detection
+/// topic, else the one LaserScan topic). Returns (scans, truth): each scan a dict
+/// {"t", "robot", "ids", "xy", "cov"} of NumPy arrays, truth a dict {landmark: (x, y)} or None.
 #[pyfunction]
 // Literal defaults (pyo3 renders them in the signature); they equal RangeBearingNoise::MRCLAM.
-#[pyo3(signature = (path, format, *, sigma_range = 0.15, sigma_bearing = 0.01))]
+#[pyo3(signature = (path, format, *, sigma_range = 0.15, sigma_bearing = 0.01, topic = None, range_max = None, allow_truncated = false))]
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn read_observations<'py>(
     py: Python<'py>,
     path: PathBuf,
     format: &str,
     sigma_range: f64,
     sigma_bearing: f64,
+    topic: Option<Bound<'py, PyAny>>,
+    range_max: Option<f32>,
+    allow_truncated: bool,
 ) -> PyResult<(Vec<Bound<'py, PyDict>>, Option<TruthDict>)> {
+    let topics: Vec<String> = match &topic {
+        None => Vec::new(),
+        Some(t) => match t.extract::<String>() {
+            Ok(one) => vec![one],
+            Err(_) => t
+                .extract::<Vec<String>>()
+                .map_err(|_| invalid("topic must be a str or a list of str"))?,
+        },
+    };
+    if format != "mcap" && (!topics.is_empty() || range_max.is_some() || allow_truncated) {
+        return Err(invalid(
+            "topic, range_max and allow_truncated are for format=\"mcap\"",
+        ));
+    }
+    let options = qrm_log::ReadOptions {
+        topics,
+        range_max,
+        allow_truncated,
+        ..Default::default()
+    };
     let data = crate::pool::detach(py, || match format {
-        "csv" => Ok(pqrm::loaders::read_csv(&path)),
+        "csv" => Ok(pqrm::loaders::read_csv(&path).map_err(perr)),
         "mrclam" => Ok(pqrm::loaders::read_mrclam(
             &path,
             RangeBearingNoise {
                 sigma_range,
                 sigma_bearing,
             },
-        )),
-        "g2o" => Ok(pqrm::loaders::read_g2o(&path)),
+        )
+        .map_err(perr)),
+        "g2o" => Ok(pqrm::loaders::read_g2o(&path).map_err(perr)),
+        "mcap" => Ok(qrm_log::read_mcap(&path, &options)
+            .map(|r| r.dataset)
+            .map_err(crate::errors::log)),
         other => Err(other.to_owned()),
     })
-    .map_err(|f| invalid(format!("format must be csv, mrclam or g2o, got {f:?}")))?
-    .map_err(perr)?;
+    .map_err(|f| {
+        invalid(format!(
+            "format must be csv, mrclam, g2o or mcap, got {f:?}"
+        ))
+    })??;
     let mut scans = Vec::with_capacity(data.scans.len());
     for s in &data.scans {
         let d = PyDict::new(py);

@@ -14,6 +14,19 @@ pub const MAX_INPUT_BYTES: u64 = 1 << 30;
 /// `io::Error` when the file cannot be opened, is a directory or a device, is larger than
 /// `max_bytes`, or is not UTF-8.
 pub fn read_text(path: &Path, max_bytes: u64) -> std::io::Result<String> {
+    String::from_utf8(read_bytes(path, max_bytes)?).map_err(|_| {
+        std::io::Error::new(
+            std::io::ErrorKind::InvalidData,
+            "stream did not contain valid UTF-8",
+        )
+    })
+}
+
+/// Reads `path` as bytes (a binary log) of at most `max_bytes` bytes.
+///
+/// # Errors
+/// As [`read_text`], without the UTF-8 check.
+pub fn read_bytes(path: &Path, max_bytes: u64) -> std::io::Result<Vec<u8>> {
     use std::io::{Error, ErrorKind};
     let file = std::fs::File::open(path)?;
     let meta = file.metadata()?;
@@ -43,6 +56,5 @@ pub fn read_text(path: &Path, max_bytes: u64) -> std::io::Result<String> {
             format!("larger than {max_bytes} bytes, the most an input file may be"),
         ));
     }
-    String::from_utf8(bytes)
-        .map_err(|_| Error::new(ErrorKind::InvalidData, "stream did not contain valid UTF-8"))
+    Ok(bytes)
 }

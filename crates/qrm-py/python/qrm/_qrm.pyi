@@ -1,5 +1,5 @@
 """Type stubs of the native module `qrm._qrm` (import `qrm`, not this)."""
-from typing import Dict, List, Optional, Tuple, final
+from typing import Union, Dict, List, Optional, Tuple, final
 
 import numpy as np
 import numpy.typing as npt
@@ -161,6 +161,9 @@ def read_observations(
     *,
     sigma_range: float = 0.15,
     sigma_bearing: float = 0.01,
+    topic: Optional[Union[str, List[str]]] = None,
+    range_max: Optional[float] = None,
+    allow_truncated: bool = False,
 ) -> Tuple[List[Dict[str, object]], Optional[Dict[int, Tuple[float, float]]]]: ...
 def single_observation(
     calculus: Calculus,

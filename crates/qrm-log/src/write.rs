@@ -1,23 +1,24 @@
-//! MCAP logs that open in Foxglove: well-known Foxglove schemas in JSON encoding where one
-//! fits, and our own documented JSON schemas for the rest.
+//! Writing MCAP logs that open in Foxglove: well-known Foxglove schemas in JSON encoding where
+//! one fits, and our own documented JSON schemas for the rest.
 //!
 //! | topic | schema | what |
 //! |---|---|---|
-//! | `/scan` | `foxglove.LaserScan` | lidar scans in the robot frame `base_link` |
+//! | `/scan` | `foxglove.LaserScan` | lidar scans in the robot frame `base_link`; channel metadata `range_min`/`range_max` |
 //! | `/world` | `foxglove.SceneUpdate` | landmarks (cylinders), walls (lines), clutter, once at t = 0 |
 //! | `/tf` | `foxglove.FrameTransform` | the true robot pose, `world` → `base_link` |
 //! | `/log` | `foxglove.Log` | events |
-//! | `/detections` | `qrm.LandmarkDetections` | ideal detections: id, x, y, covariance (robot frame) |
+//! | `/detections` | `qrm.LandmarkDetections` | detections: id, x, y, covariance (robot frame), exact time `t` |
 //!
-//! Time stamps are simulated time. The writer emits chunks of at most 256 KiB as it goes, so
-//! a run killed midway leaves a file readable up to its last finished chunk.
+//! Time stamps are simulated (or recorded) time. The writer emits chunks of at most 256 KiB as
+//! it goes, so a run killed midway leaves a file readable up to its last finished chunk
+//! ([`crate::ReadOptions::allowing_truncated`]).
 
 use std::collections::BTreeMap;
 use std::fs::File;
 use std::io::BufWriter;
 use std::path::Path;
 
-use anyhow::{Context, Result};
+use crate::error::{LogError, Result};
 use serde_json::{Value, json};
 
 /// JSON Schema of `qrm.LandmarkDetections` (documented here and in docs/logs.md).
@@ -33,7 +34,8 @@ pub const DETECTIONS_SCHEMA: &str = r#"{
       "x": {"type": "number", "description": "m"},
       "y": {"type": "number", "description": "m"},
       "cov": {"type": "array", "items": {"type": "number"}, "description": "[cxx, cxy, cyy] in m²"}
-    }}}
+    }}},
+    "t": {"type": "number", "description": "exact time (s), when the timestamp would round it"}
   }
 }"#;
 
@@ -101,78 +103,135 @@ pub fn yaw(theta: f64) -> Value {
 /// An MCAP file being written.
 pub struct McapLog {
     writer: mcap::Writer<BufWriter<File>>,
+    path: std::path::PathBuf,
     channels: BTreeMap<String, u16>,
     sequence: u32,
 }
 
 impl McapLog {
-    /// Creates the file and registers the channels.
+    /// Creates an empty log at `path` (channels are added with [`McapLog::add_channel`]).
+    ///
+    /// # Errors
+    /// [`LogError::Io`] when the file cannot be created, [`LogError::Write`].
     pub fn create(path: &Path) -> Result<Self> {
-        let file = File::create(path).with_context(|| format!("creating {}", path.display()))?;
-        let mut writer = mcap::WriteOptions::new()
+        let file = File::create(path).map_err(|source| LogError::Io {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        let writer = mcap::WriteOptions::new()
             .compression(None)
             .chunk_size(Some(256 * 1024))
             .profile("")
             .create(BufWriter::new(file))
-            .context("starting the MCAP file")?;
-        let mut channels = BTreeMap::new();
-        for (topic, schema_name) in [
-            ("/scan", "foxglove.LaserScan"),
-            ("/world", "foxglove.SceneUpdate"),
-            ("/tf", "foxglove.FrameTransform"),
-            ("/log", "foxglove.Log"),
-        ] {
-            let sid = writer.add_schema(
-                schema_name,
-                "jsonschema",
-                foxglove_schema(schema_name).as_bytes(),
-            )?;
-            channels.insert(
-                topic.to_owned(),
-                writer.add_channel(sid, topic, "json", &BTreeMap::new())?,
-            );
-        }
-        let sid = writer.add_schema(
-            "qrm.LandmarkDetections",
-            "jsonschema",
-            DETECTIONS_SCHEMA.as_bytes(),
-        )?;
-        channels.insert(
-            "/detections".into(),
-            writer.add_channel(sid, "/detections", "json", &BTreeMap::new())?,
-        );
+            .map_err(|source| LogError::Write {
+                path: path.to_path_buf(),
+                source,
+            })?;
         Ok(Self {
             writer,
-            channels,
+            path: path.to_path_buf(),
+            channels: BTreeMap::new(),
             sequence: 0,
         })
     }
 
-    /// Registers another channel: `schema_name` is a Foxglove well-known schema
+    /// Creates a log with the channels of a simulated robot (`/scan`, `/world`, `/tf`, `/log`,
+    /// `/detections`). `lidar_range` (min, max, m) goes into the `/scan` channel's metadata
+    /// (`range_min`, `range_max`), so a reader knows which ranges mean "no return".
+    ///
+    /// # Errors
+    /// As [`McapLog::create`].
+    pub fn robot(path: &Path, lidar_range: Option<(f64, f64)>) -> Result<Self> {
+        let mut log = Self::create(path)?;
+        let mut scan_meta = BTreeMap::new();
+        if let Some((lo, hi)) = lidar_range {
+            scan_meta.insert("range_min".to_owned(), lo.to_string());
+            scan_meta.insert("range_max".to_owned(), hi.to_string());
+        }
+        log.add_channel_with_metadata("/scan", "foxglove.LaserScan", None, &scan_meta)?;
+        for (topic, schema_name) in [
+            ("/world", "foxglove.SceneUpdate"),
+            ("/tf", "foxglove.FrameTransform"),
+            ("/log", "foxglove.Log"),
+        ] {
+            log.add_channel(topic, schema_name, None)?;
+        }
+        log.add_channel(
+            "/detections",
+            "qrm.LandmarkDetections",
+            Some(DETECTIONS_SCHEMA),
+        )?;
+        Ok(log)
+    }
+
+    /// Registers a channel: `schema_name` is a Foxglove well-known schema
     /// (`foxglove.SceneUpdate`, …) when `schema` is `None`, else our own JSON Schema text.
+    ///
+    /// # Errors
+    /// [`LogError::Write`].
     pub fn add_channel(
         &mut self,
         topic: &str,
         schema_name: &str,
         schema: Option<&str>,
     ) -> Result<()> {
+        self.add_channel_with_metadata(topic, schema_name, schema, &BTreeMap::new())
+    }
+
+    /// As [`McapLog::add_channel`], with channel metadata (e.g. `robot`, `range_max`).
+    ///
+    /// # Errors
+    /// [`LogError::Write`].
+    pub fn add_channel_with_metadata(
+        &mut self,
+        topic: &str,
+        schema_name: &str,
+        schema: Option<&str>,
+        metadata: &BTreeMap<String, String>,
+    ) -> Result<()> {
         let text = schema.map_or_else(|| foxglove_schema(schema_name), str::to_owned);
+        let path = &self.path;
+        let err = |source| LogError::Write {
+            path: path.clone(),
+            source,
+        };
         let sid = self
             .writer
-            .add_schema(schema_name, "jsonschema", text.as_bytes())?;
+            .add_schema(schema_name, "jsonschema", text.as_bytes())
+            .map_err(err)?;
         let cid = self
             .writer
-            .add_channel(sid, topic, "json", &BTreeMap::new())?;
+            .add_channel(sid, topic, "json", metadata)
+            .map_err(err)?;
         self.channels.insert(topic.to_owned(), cid);
         Ok(())
     }
 
-    /// Writes one JSON message at simulated time `t` (s).
+    /// Writes a metadata record (e.g. [`crate::TRUTH_METADATA`]).
+    ///
+    /// # Errors
+    /// [`LogError::Write`].
+    pub fn add_metadata(&mut self, name: &str, metadata: BTreeMap<String, String>) -> Result<()> {
+        self.writer
+            .write_metadata(&mcap::records::Metadata {
+                name: name.to_owned(),
+                metadata,
+            })
+            .map_err(|source| LogError::Write {
+                path: self.path.clone(),
+                source,
+            })
+    }
+
+    /// Writes one JSON message at time `t` (s).
+    ///
+    /// # Errors
+    /// [`LogError::Invalid`] for a topic without a channel, [`LogError::Write`].
     pub fn write(&mut self, topic: &str, t: f64, message: &Value) -> Result<()> {
         let channel_id = *self
             .channels
             .get(topic)
-            .with_context(|| format!("no channel {topic}"))?;
+            .ok_or_else(|| LogError::Invalid(format!("no channel {topic}")))?;
         let ns = (t.max(0.0) * 1e9).round() as u64;
         self.sequence += 1;
         let header = mcap::records::MessageHeader {
@@ -182,13 +241,22 @@ impl McapLog {
             publish_time: ns,
         };
         self.writer
-            .write_to_known_channel(&header, message.to_string().as_bytes())?;
-        Ok(())
+            .write_to_known_channel(&header, message.to_string().as_bytes())
+            .map_err(|source| LogError::Write {
+                path: self.path.clone(),
+                source,
+            })
     }
 
     /// Writes the summary and closes the file.
+    ///
+    /// # Errors
+    /// [`LogError::Write`].
     pub fn finish(mut self) -> Result<()> {
-        self.writer.finish().context("finishing the MCAP file")?;
+        self.writer.finish().map_err(|source| LogError::Write {
+            path: self.path.clone(),
+            source,
+        })?;
         Ok(())
     }
 }

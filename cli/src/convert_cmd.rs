@@ -1,0 +1,80 @@
+//! `qrm convert`: a recording (CSV, MRCLAM, g2o) written as MCAP that Foxglove opens and
+//! `qrm map --format mcap` reads back into the same map.
+
+use std::path::PathBuf;
+
+use anyhow::{Context, Result, bail};
+use pqrm::loaders::{RangeBearingNoise, read_truth_csv};
+
+/// `qrm convert`.
+#[derive(Debug, clap::Args)]
+pub struct ConvertArgs {
+    /// Input format: csv, mrclam or g2o.
+    #[arg(long)]
+    pub from: String,
+    /// Input file (csv, g2o) or directory (mrclam).
+    #[arg(long)]
+    pub input: PathBuf,
+    /// Ground truth `landmark,x,y` CSV (MRCLAM brings its own); written into the log.
+    #[arg(long)]
+    pub truth: Option<PathBuf>,
+    /// Range noise for range-bearing formats (m).
+    #[arg(long, default_value_t = RangeBearingNoise::MRCLAM.sigma_range)]
+    pub sigma_range: f64,
+    /// Bearing noise for range-bearing formats (rad).
+    #[arg(long, default_value_t = RangeBearingNoise::MRCLAM.sigma_bearing)]
+    pub sigma_bearing: f64,
+    /// The MCAP file to write.
+    #[arg(long)]
+    pub out: PathBuf,
+}
+
+/// Runs `qrm convert`.
+pub fn run(a: ConvertArgs) -> Result<()> {
+    if a.from == "mcap" {
+        bail!("--from mcap: the input is MCAP already");
+    }
+    let noise = RangeBearingNoise {
+        sigma_range: a.sigma_range,
+        sigma_bearing: a.sigma_bearing,
+    };
+    let mut data = crate::pqrm_cmd::load_dataset(&a.from, &a.input, noise)?;
+    if let Some(t) = &a.truth {
+        data.truth = Some(read_truth_csv(t)?);
+    }
+    if a.out.is_dir() {
+        bail!("--out {} is a directory, not an MCAP file", a.out.display());
+    }
+    // Written beside the target and renamed when finished: a failure or Ctrl-C never leaves a
+    // half-written file under the final name.
+    let dir = match a.out.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
+        _ => PathBuf::from("."),
+    };
+    std::fs::create_dir_all(&dir).with_context(|| format!("creating {}", dir.display()))?;
+    let stage = crate::output::Staging::new(&dir.join(format!(
+        ".convert-{}",
+        a.out
+            .file_name()
+            .map_or_else(String::new, |n| n.to_string_lossy().into_owned())
+    )))?;
+    let tmp = stage.path().join("run.mcap");
+    qrm_log::write_dataset(&tmp, &data, &a.input.display().to_string())?;
+    std::fs::rename(&tmp, &a.out)
+        .with_context(|| format!("moving the log to {}", a.out.display()))?;
+    drop(stage);
+    let robots: std::collections::BTreeSet<u32> = data.scans.iter().map(|s| s.robot).collect();
+    println!(
+        "{}: {} scans of {} robot(s){}; wrote {}",
+        a.input.display(),
+        data.scans.len(),
+        robots.len(),
+        if data.truth.is_some() {
+            " with surveyed landmarks"
+        } else {
+            ""
+        },
+        a.out.display()
+    );
+    Ok(())
+}
