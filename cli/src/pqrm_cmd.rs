@@ -818,6 +818,16 @@ fn real(a: RealArgs) -> Result<()> {
         data.scans.truncate(n);
     }
     let check = noise_check(&data)?;
+    for sus in &check.suspects {
+        eprintln!(
+            "warning: {}: the survey of landmark {} disagrees with the measurements (median |z| {:.1} over {} pairs, the recording's {:.2}): swapped, moved or misidentified?",
+            input.display(),
+            sus.landmark,
+            sus.median_abs_z,
+            sus.pairs,
+            check.z_median_abs
+        );
+    }
     let calculi: Vec<String> = qsr_core::POINT_CALCULI
         .iter()
         .map(|s| (*s).to_owned())
@@ -859,11 +869,23 @@ fn real(a: RealArgs) -> Result<()> {
         Vec::new()
     };
     let secs = start.elapsed().as_secs_f64();
-    write_real(&out_dir, &results, &check, data.scans.len(), noise, secs)?;
+    let title = input.file_name().map_or_else(
+        || input.display().to_string(),
+        |n| n.to_string_lossy().into_owned(),
+    );
+    write_real(
+        &out_dir,
+        &title,
+        &results,
+        &check,
+        data.scans.len(),
+        noise,
+        secs,
+    )?;
     write_robots(&out_dir, &robots)?;
     println!(
         "{:<14} {:>6} {:>9} {:>9} {:>9} {:>9} {:>9}",
-        "calculus", "sets", "entropy", "err", "frame err", "nd", "random"
+        "calculus", "sets", "entropy", "err", "majority", "nd", "random"
     );
     for r in &results {
         println!(
@@ -872,7 +894,7 @@ fn real(a: RealArgs) -> Result<()> {
             r.pqrm.n_sets,
             r.pqrm.mean_entropy,
             r.pqrm.error_rate,
-            r.per_frame.error_rate,
+            r.majority.error_rate,
             r.pqrm.mean_neighbor_distance,
             r.random.error_rate
         );
@@ -967,8 +989,10 @@ fn write_robots(out: &Path, robots: &[pqrm::robots::RobotComparison]) -> Result<
     Ok(())
 }
 
+#[allow(clippy::too_many_arguments)]
 fn write_real(
     out: &Path,
+    title: &str,
     results: &[RealCalculusResult],
     check: &pqrm::study::NoiseCheck,
     frames: usize,
@@ -1001,6 +1025,11 @@ fn write_real(
             r.pqrm.error_rate,
             r.pqrm.mean_neighbor_distance,
             top(&r.pqrm.top_n_error)
+        )?;
+        writeln!(
+            csv,
+            "{},majority-vote,{},,{:.4},{:.4},",
+            r.calculus, r.majority.n, r.majority.error_rate, r.majority.mean_neighbor_distance
         )?;
         writeln!(
             csv,
@@ -1068,10 +1097,15 @@ fn write_real(
         &series,
     )?;
     let mut s = String::new();
-    let _ = writeln!(
-        s,
-        "# PQRM on MRCLAM Dataset 7 (the analogue of thesis §2.3.2)\n"
-    );
+    let _ = writeln!(s, "# PQRM on {title} (the analogue of thesis §2.3.2)\n");
+    for sus in &check.suspects {
+        let _ = writeln!(
+            s,
+            "**Warning: the survey of landmark {} disagrees with the measurements** (median |z| {:.1} over {} pairs, the recording's median {:.2}): \
+             swapped, moved or misidentified? Every triplet with it is scored against a truth that may be wrong.\n",
+            sus.landmark, sus.median_abs_z, sus.pairs, check.z_median_abs
+        );
+    }
     let _ = writeln!(
         s,
         "{frames} frames with three or more landmarks; noise model σ_r = {} m, σ_b = {} rad; {:.1} s.\n",
@@ -1079,21 +1113,67 @@ fn write_real(
     );
     let _ = writeln!(
         s,
-        "| calculus | sets | PQRM entropy | PQRM error | per-frame error | random error | PQRM neighbour distance | top-2 error |\n|---|---|---|---|---|---|---|---|"
+        "| calculus | sets | PQRM entropy | PQRM error | majority vote error | per-frame error | random error | PQRM neighbour distance | top-2 error |\n|---|---|---|---|---|---|---|---|---|"
     );
     for r in results {
         let _ = writeln!(
             s,
-            "| {} | {} | {:.3} | {:.3} | {:.3} | {:.3} | {:.3} | {:.3} |",
+            "| {} | {} | {:.3} | {:.3} | {:.3} | {:.3} | {:.3} | {:.3} | {:.3} |",
             r.calculus,
             r.pqrm.n_sets,
             r.pqrm.mean_entropy,
             r.pqrm.error_rate,
+            r.majority.error_rate,
             r.per_frame.error_rate,
             r.random.error_rate,
             r.pqrm.mean_neighbor_distance,
             r.pqrm.top_n_error.get(1).copied().unwrap_or(0.0)
         );
+    }
+    let _ = writeln!(
+        s,
+        "\nBaselines. *Majority vote*: each triplet takes the state most frames' single-frame ML states agree on, scored once per triplet \
+         as the map is — the fair baseline a filter must beat. *Per-frame*: every (triplet, frame) scored once, so often-seen (mostly easy) \
+         triplets weigh more; it measures a single frame, not a map.\n"
+    );
+    let _ = writeln!(
+        s,
+        "| calculus | PQRM error ≤ majority vote | calibration: ECE | largest bin gap (bins ≥ {} triplets) | calibrated (every gap ≤ 0.05) |\n|---|---|---|---|---|",
+        pqrm::calibration::MIN_BIN
+    );
+    for r in results {
+        let _ = writeln!(
+            s,
+            "| {} | {} ({:.3} vs {:.3}) | {:.3} | {:.3} | {} |",
+            r.calculus,
+            if r.pqrm.error_rate <= r.majority.error_rate {
+                "yes"
+            } else {
+                "**no**"
+            },
+            r.pqrm.error_rate,
+            r.majority.error_rate,
+            r.calibration.ece,
+            r.calibration.max_gap,
+            if r.calibration.max_gap <= 0.05 {
+                "yes"
+            } else {
+                "**no**"
+            }
+        );
+    }
+    let _ = writeln!(
+        s,
+        "\nReliability diagram (triplets binned by P(ML); a calibrated map has accuracy ≈ mean P(ML) in every bin):\n\n| calculus | P(ML) bin | triplets | mean P(ML) | accuracy |\n|---|---|---|---|---|"
+    );
+    for r in results {
+        for b in &r.calibration.bins {
+            let _ = writeln!(
+                s,
+                "| {} | [{}, {}) | {} | {:.3} | {:.3} |",
+                r.calculus, b.lo, b.hi, b.n, b.mean_p_ml, b.accuracy
+            );
+        }
     }
     let _ = writeln!(
         s,

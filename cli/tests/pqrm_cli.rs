@@ -402,8 +402,22 @@ fn the_real_data_study_runs_on_a_subset() {
     let csv = std::fs::read_to_string(out.join("real.csv")).unwrap();
     assert_eq!(
         csv.lines().count(),
-        1 + 12,
-        "six calculi × (PQRM, per-frame)"
+        1 + 18,
+        "six calculi × (PQRM, majority vote, per-frame)"
+    );
+    let report = std::fs::read_to_string(out.join("report.md")).unwrap();
+    for part in [
+        "# PQRM on mrclam-dataset7",
+        "| calculus | PQRM error ≤ majority vote |",
+        "Reliability diagram",
+        "## Many robots, one map",
+    ] {
+        assert!(report.contains(part), "report.md lacks {part:?}");
+    }
+    let robots = std::fs::read_to_string(out.join("robots.csv")).unwrap();
+    assert!(
+        robots.lines().any(|l| l.starts_with("edc,merged,")),
+        "{robots}"
     );
     std::fs::remove_dir_all(&out).ok();
 }

@@ -36,6 +36,7 @@
 //! # Ok::<(), pqrm::PqrmError>(())
 //! ```
 
+pub mod calibration;
 pub mod error;
 pub mod likelihood;
 pub mod loaders;

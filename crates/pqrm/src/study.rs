@@ -578,6 +578,20 @@ pub struct FrameMetrics {
     pub top_n_error: Vec<f64>,
 }
 
+/// Frames' votes for each state of one triplet, and the summed single-frame probabilities.
+type Votes = (Vec<u32>, Vec<f64>);
+
+/// The per-triplet majority vote's scores.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+pub struct VoteMetrics {
+    /// Triplets scored.
+    pub n: usize,
+    /// Fraction whose majority state is wrong.
+    pub error_rate: f64,
+    /// Mean neighbour distance of the majority state.
+    pub mean_neighbor_distance: f64,
+}
+
 /// One calculus on a recorded dataset.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct RealCalculusResult {
@@ -587,8 +601,15 @@ pub struct RealCalculusResult {
     pub pqrm: MapMetrics,
     /// Entropy of every recorded set (Fig 2.14 histogram data).
     pub entropies: Vec<f64>,
-    /// The per-frame baseline's scores.
+    /// The per-frame baseline's scores (every (triplet, frame) scored once: often-seen
+    /// triplets weigh more).
     pub per_frame: FrameMetrics,
+    /// The per-triplet majority vote: each triplet's state is the one most frames' ML states
+    /// agree on (ties: the larger summed single-frame probability), scored once per triplet,
+    /// as the map is — the fair baseline a filter must beat.
+    pub majority: VoteMetrics,
+    /// The map's reliability diagram.
+    pub calibration: crate::calibration::Calibration,
     /// Random-guess baselines.
     pub random: Baselines,
 }
@@ -614,6 +635,9 @@ pub fn run_real(
         .map(|c| Pqrm::new(c.clone(), config))
         .collect::<Result<Vec<_>>>()?;
     let n = family.calculi.len();
+    // Per calculus and triplet: how many frames voted for each state, and the summed
+    // single-frame probability (the tie-breaker).
+    let mut votes: Vec<BTreeMap<LandmarkSet, Votes>> = vec![BTreeMap::new(); n];
     let mut frame_acc: Vec<(usize, usize, u64, f64, Vec<usize>)> = family
         .calculi
         .iter()
@@ -639,6 +663,13 @@ pub fn run_real(
                     updates: 1,
                 };
                 let ml = b.ml_state();
+                let v = votes[i]
+                    .entry(*set)
+                    .or_insert_with(|| (vec![0; calc.n_states()], vec![0.0; calc.n_states()]));
+                v.0[ml.index()] += 1;
+                for (m, p) in v.1.iter_mut().zip(b.probabilities()) {
+                    *m += p;
+                }
                 acc.0 += 1;
                 acc.1 += usize::from(ml != t);
                 acc.2 += u64::from(calc.neighbours().distance(ml, t).unwrap_or(0));
@@ -661,8 +692,29 @@ pub fn run_real(
                 1.0 - covered as f64 / nf
             })
             .collect();
+        let calc = map.calculus();
+        let (mut vn, mut vwrong, mut vdist) = (0usize, 0usize, 0u64);
+        for (set, (count, mass)) in &votes[i] {
+            let Some(t) = truth.state(calc, set)? else {
+                continue;
+            };
+            let best = (0..count.len())
+                .max_by(|&a, &b| count[a].cmp(&count[b]).then(mass[a].total_cmp(&mass[b])))
+                .unwrap_or(0);
+            let s = qsr_core::StateId(u16::try_from(best).unwrap_or(u16::MAX));
+            vn += 1;
+            vwrong += usize::from(s != t);
+            vdist += u64::from(calc.neighbours().distance(s, t).unwrap_or(0));
+        }
+        let vnf = vn.max(1) as f64;
         out.push(RealCalculusResult {
             calculus: map.calculus().name().to_owned(),
+            majority: VoteMetrics {
+                n: vn,
+                error_rate: vwrong as f64 / vnf,
+                mean_neighbor_distance: vdist as f64 / vnf,
+            },
+            calibration: crate::calibration::calibration(map, truth)?,
             pqrm: evaluate(map, truth)?,
             entropies: map.iter().map(|(_, b)| b.entropy()).collect(),
             per_frame: FrameMetrics {
@@ -693,7 +745,29 @@ pub struct NoiseCheck {
     pub outlier_fraction: f64,
     /// Median absolute distance error (m).
     pub median_abs_error: f64,
+    /// Landmarks whose measured distances disagree with the survey far more than the others'
+    /// (a swapped, moved or misidentified landmark), worst first.
+    pub suspects: Vec<SuspectLandmark>,
 }
+
+/// A landmark whose surveyed position the measurements contradict.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct SuspectLandmark {
+    /// The landmark.
+    pub landmark: u32,
+    /// Pairs it was measured in.
+    pub pairs: usize,
+    /// Median |z| of those pairs (the dataset's median is `z_median_abs`).
+    pub median_abs_z: f64,
+}
+
+/// A landmark is suspect when its pairs' median |z| is beyond both this and
+/// [`SUSPECT_RATIO`] times the dataset's median, over at least [`SUSPECT_MIN_PAIRS`] pairs.
+pub const SUSPECT_Z: f64 = 3.0;
+/// See [`SUSPECT_Z`].
+pub const SUSPECT_RATIO: f64 = 3.0;
+/// See [`SUSPECT_Z`].
+pub const SUSPECT_MIN_PAIRS: usize = 10;
 
 /// Compares observed pair distances with the truth (see [`NoiseCheck`]).
 ///
@@ -706,6 +780,8 @@ pub fn noise_check(dataset: &Dataset) -> Result<NoiseCheck> {
         .ok_or_else(|| PqrmError::Mismatch("the noise check needs ground truth".into()))?;
     let mut z = Vec::new();
     let mut abs_err = Vec::new();
+    let mut per_landmark: std::collections::BTreeMap<u32, Vec<f64>> =
+        std::collections::BTreeMap::new();
     for scan in &dataset.scans {
         for (i, a) in scan.observations.iter().enumerate() {
             for b in &scan.observations[i + 1..] {
@@ -726,7 +802,10 @@ pub fn noise_check(dataset: &Dataset) -> Result<NoiseCheck> {
                 let dt = (ta[0] - tb[0]).hypot(ta[1] - tb[1]);
                 abs_err.push((dm - dt).abs());
                 if var > 0.0 {
-                    z.push((dm - dt) / var.sqrt());
+                    let zi = (dm - dt) / var.sqrt();
+                    z.push(zi);
+                    per_landmark.entry(a.id.0).or_default().push(zi.abs());
+                    per_landmark.entry(b.id.0).or_default().push(zi.abs());
                 }
             }
         }
@@ -750,10 +829,23 @@ pub fn noise_check(dataset: &Dataset) -> Result<NoiseCheck> {
         v.sort_by(f64::total_cmp);
         v[v.len() / 2]
     };
+    let z_median_abs = median(z.iter().map(|v| v.abs()).collect());
+    let mut suspects: Vec<SuspectLandmark> = per_landmark
+        .into_iter()
+        .filter(|(_, v)| v.len() >= SUSPECT_MIN_PAIRS)
+        .map(|(landmark, v)| SuspectLandmark {
+            landmark,
+            pairs: v.len(),
+            median_abs_z: median(v),
+        })
+        .filter(|s| s.median_abs_z > SUSPECT_Z.max(SUSPECT_RATIO * z_median_abs))
+        .collect();
+    suspects.sort_by(|a, b| b.median_abs_z.total_cmp(&a.median_abs_z));
     Ok(NoiseCheck {
         pairs: z.len(),
         z_std: std,
-        z_median_abs: median(z.iter().map(|v| v.abs()).collect()),
+        z_median_abs,
+        suspects,
         outlier_fraction: z.iter().filter(|v| v.abs() > 3.0).count() as f64 / n,
         median_abs_error: median(abs_err),
     })

@@ -219,38 +219,119 @@ fn note_channel(
 /// Checks that every record inside an uncompressed chunk ends within the chunk: `mcap` 0.26
 /// subtracts a record's length from the chunk's remaining bytes unchecked (an overflow panic
 /// in debug builds, a runaway read in release). A truncated file stops the check where it is
-/// cut; the message pass reports that.
+/// cut; the message pass reports that. Records are taken raw from the sans-I/O reader (its
+/// own chunk-header checks bound every length), never parsed here.
 fn check_plain_chunks(bytes: &[u8]) -> mcap::McapResult<()> {
-    let Ok(reader) = mcap::read::LinearReader::new_with_options(
-        bytes,
-        mcap::read::Options::IgnoreEndMagic.into(),
-    ) else {
-        return Ok(());
-    };
-    for record in reader {
-        let Ok(record) = record else { break };
-        let mcap::records::Record::Chunk { header, data } = record else {
-            continue;
-        };
-        if !header.compression.is_empty() {
-            continue;
-        }
-        let mut rest: &[u8] = &data;
-        while !rest.is_empty() {
-            let len = rest
-                .get(1..9)
-                .and_then(|b| <[u8; 8]>::try_from(b).ok())
-                .map(u64::from_le_bytes)
-                .ok_or(mcap::McapError::UnexpectedEoc)?;
-            let end = usize::try_from(len)
-                .ok()
-                .and_then(|l| l.checked_add(9))
-                .filter(|&e| e <= rest.len())
-                .ok_or(mcap::McapError::UnexpectedEoc)?;
-            rest = &rest[end..];
+    let mut reader = mcap::sans_io::LinearReader::new_with_options(
+        mcap::sans_io::LinearReaderOptions::default()
+            .with_record_length_limit(MAX_RECORD_BYTES)
+            .with_emit_chunks(true),
+    );
+    let mut buf = bytes;
+    while let Some(event) = reader.next_event() {
+        match event {
+            Ok(mcap::sans_io::LinearReadEvent::ReadRequest(need)) => {
+                let n = need.min(buf.len());
+                reader.insert(n).copy_from_slice(&buf[..n]);
+                reader.notify_read(n);
+                buf = &buf[n..];
+            }
+            Ok(mcap::sans_io::LinearReadEvent::Record { data, opcode }) => {
+                if opcode == mcap::records::op::CHUNK && !plain_chunk_fits(data) {
+                    return Err(mcap::McapError::UnexpectedEoc);
+                }
+            }
+            Err(_) => break,
         }
     }
     Ok(())
+}
+
+/// Whether a chunk is compressed or its records each end inside it. Layout: start and end
+/// time, uncompressed size (u64 each), CRC (u32), compression (string), records (u64 length
+/// and bytes).
+fn plain_chunk_fits(chunk: &[u8]) -> bool {
+    let mut r = Fields(chunk);
+    let header = r.take(28).is_some();
+    let Some(compression) = r.string() else {
+        return false;
+    };
+    if !header {
+        return false;
+    }
+    if !compression.is_empty() {
+        return true;
+    }
+    let Some(mut records) = r.u64().and_then(|n| r.take(usize::try_from(n).ok()?)) else {
+        return false;
+    };
+    while !records.is_empty() {
+        let mut f = Fields(records);
+        let Some(len) = f.take(1).and_then(|_| f.u64()) else {
+            return false;
+        };
+        match usize::try_from(len).ok().and_then(|l| f.take(l)) {
+            Some(_) => records = f.0,
+            None => return false,
+        }
+    }
+    true
+}
+
+/// Little-endian fields of an MCAP record, each length checked against what is left.
+struct Fields<'a>(&'a [u8]);
+
+impl<'a> Fields<'a> {
+    fn take(&mut self, n: usize) -> Option<&'a [u8]> {
+        let (head, tail) = self.0.split_at_checked(n)?;
+        self.0 = tail;
+        Some(head)
+    }
+    fn u32(&mut self) -> Option<u32> {
+        self.take(4)?.try_into().ok().map(u32::from_le_bytes)
+    }
+    fn u64(&mut self) -> Option<u64> {
+        self.take(8)?.try_into().ok().map(u64::from_le_bytes)
+    }
+    /// A u32-length-prefixed string (or byte array).
+    fn string(&mut self) -> Option<&'a [u8]> {
+        let n = usize::try_from(self.u32()?).ok()?;
+        self.take(n)
+    }
+    /// A u32-byte-length-prefixed map of strings.
+    fn map(&mut self) -> Option<()> {
+        let n = usize::try_from(self.u32()?).ok()?;
+        let mut inner = Fields(self.take(n)?);
+        while !inner.0.is_empty() {
+            inner.string()?;
+            inner.string()?;
+        }
+        Some(())
+    }
+}
+
+/// Whether every length-prefixed field of a record qrm parses fits in the record: `mcap`'s
+/// parser reserves a string's declared length before reading it, so a corrupt 4 GiB length
+/// would be a 4 GiB allocation.
+fn fields_fit(opcode: u8, data: &[u8]) -> bool {
+    use mcap::records::op;
+    let mut f = Fields(data);
+    let ok = match opcode {
+        op::SCHEMA => f
+            .take(2)
+            .and_then(|_| f.string())
+            .and_then(|_| f.string())
+            .and_then(|_| f.string()),
+        op::CHANNEL => f
+            .take(4)
+            .and_then(|_| f.string())
+            .and_then(|_| f.string())
+            .and_then(|_| f.map().map(|()| &[][..])),
+        op::METADATA => f.string().and_then(|_| f.map().map(|()| &[][..])),
+        op::MESSAGE => f.take(22),
+        _ => None,
+    };
+    ok.is_some()
 }
 
 /// The file's records in order, chunks decompressed, each record's length bounded by
@@ -285,6 +366,20 @@ impl Iterator for Records<'_> {
                     self.buf = &self.buf[n..];
                 }
                 Ok(mcap::sans_io::LinearReadEvent::Record { data, opcode }) => {
+                    use mcap::records::op;
+                    // Only the records qrm reads are parsed, after their lengths are checked.
+                    if !matches!(
+                        opcode,
+                        op::SCHEMA | op::CHANNEL | op::MESSAGE | op::METADATA
+                    ) {
+                        continue;
+                    }
+                    if !fields_fit(opcode, data) {
+                        return Some(Err(mcap::McapError::RecordTooLarge {
+                            opcode,
+                            len: data.len() as u64,
+                        }));
+                    }
                     return Some(mcap::parse_record(opcode, data).map(Record::into_owned));
                 }
                 Err(e) => return Some(Err(e)),
