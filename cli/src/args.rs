@@ -124,6 +124,13 @@ pub struct RealArgs {
     /// Use only the first N frames (with three or more landmarks).
     #[arg(long)]
     pub max_frames: Option<usize>,
+    /// Inverse sensor model of the main run: gaussian, student-t:NU or outliers:RATE,SPREAD
+    /// (the report also compares a fixed set of models and tempering exponents).
+    #[arg(long, default_value = "gaussian")]
+    pub sensor: String,
+    /// Tempering exponent of the main run, in (0, 1].
+    #[arg(long, default_value_t = 1.0)]
+    pub temper: f64,
     /// Seed.
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
@@ -170,6 +177,15 @@ pub struct MapArgs {
     /// instead of failing.
     #[arg(long)]
     pub allow_truncated: bool,
+    /// Inverse sensor model: gaussian (the thesis), student-t:NU (heavy tails, e.g.
+    /// student-t:4) or outliers:RATE,SPREAD (a Gaussian plus outliers uniform within SPREAD m
+    /// of the sensor, e.g. outliers:0.05,30).
+    #[arg(long, default_value = "gaussian")]
+    pub sensor: String,
+    /// Tempering exponent in (0, 1]: each frame's evidence counts τ times (frames of a robot
+    /// standing still are not independent).
+    #[arg(long, default_value_t = 1.0)]
+    pub temper: f64,
     /// Map only these robots' scans (comma-separated robot numbers, e.g. `1,2`).
     #[arg(long, value_delimiter = ',')]
     pub robots: Vec<u32>,

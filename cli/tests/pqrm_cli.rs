@@ -414,6 +414,13 @@ fn the_real_data_study_runs_on_a_subset() {
     ] {
         assert!(report.contains(part), "report.md lacks {part:?}");
     }
+    let sweep = std::fs::read_to_string(out.join("sensor_models.csv")).unwrap();
+    assert_eq!(
+        sweep.lines().count(),
+        1 + 6 * 6,
+        "six variants × six calculi"
+    );
+    assert!(sweep.contains("\nstudent-t:4,0.3,edc,"), "{sweep}");
     let robots = std::fs::read_to_string(out.join("robots.csv")).unwrap();
     assert!(
         robots.lines().any(|l| l.starts_with("edc,merged,")),

@@ -47,6 +47,7 @@ pub mod reason;
 pub mod reason_study;
 pub mod robots;
 pub mod sampler;
+pub mod sensor;
 pub mod study;
 
 pub use error::{PqrmError, Result};

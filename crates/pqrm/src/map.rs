@@ -16,6 +16,7 @@ use crate::likelihood::{LandmarkSet, Orderings, log_likelihood, step_counts};
 use crate::metrics::entropy;
 use crate::observation::{LandmarkId, Scan};
 use crate::sampler::ScanSamples;
+use crate::sensor::SensorModel;
 
 /// Mapper settings.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -28,6 +29,18 @@ pub struct PqrmConfig {
     pub orderings: Orderings,
     /// Seed of the sampler.
     pub seed: u64,
+    /// The inverse sensor model the detections are sampled from (maps saved before it
+    /// existed are Gaussian).
+    #[serde(default)]
+    pub sensor: SensorModel,
+    /// Tempering exponent τ ∈ (0, 1]: each step's log-likelihood is multiplied by τ, so n
+    /// correlated frames count as τ·n independent ones (1 = the thesis's eq. 2.10).
+    #[serde(default = "one")]
+    pub temper: f64,
+}
+
+fn one() -> f64 {
+    1.0
 }
 
 impl Default for PqrmConfig {
@@ -37,6 +50,8 @@ impl Default for PqrmConfig {
             floor: 1.0,
             orderings: Orderings::All,
             seed: 0,
+            sensor: SensorModel::Gaussian,
+            temper: 1.0,
         }
     }
 }
@@ -72,6 +87,13 @@ impl PqrmConfig {
     /// negative/non-finite floor.
     pub fn validate(&self) -> Result<()> {
         check_samples(self.samples)?;
+        self.sensor.validate()?;
+        if !(self.temper.is_finite() && self.temper > 0.0 && self.temper <= 1.0) {
+            return Err(PqrmError::InvalidConfig(format!(
+                "temper must be in (0, 1], got {}",
+                self.temper
+            )));
+        }
         if !(self.floor.is_finite() && self.floor >= 0.0) {
             return Err(PqrmError::InvalidConfig(format!(
                 "floor must be finite and >= 0, got {}",
@@ -235,7 +257,13 @@ impl Pqrm {
     /// # Errors
     /// [`PqrmError::CoincidentLandmarks`] (nothing is changed then).
     pub fn update(&mut self, scan: &Scan) -> Result<UpdateReport> {
-        let samples = ScanSamples::draw(scan, self.config.samples, self.config.seed, self.steps);
+        let samples = ScanSamples::draw_with(
+            scan,
+            self.config.samples,
+            self.config.seed,
+            self.steps,
+            self.config.sensor,
+        );
         let counts = step_counts(&self.calculus, &samples, self.config.orderings)?;
         let report = self.apply_counts(&counts)?;
         Ok(report)
@@ -257,7 +285,12 @@ impl Pqrm {
         }
         let mut report = UpdateReport::default();
         for (set, c) in counts {
-            let ll = log_likelihood(c, self.config.floor);
+            let mut ll = log_likelihood(c, self.config.floor);
+            if self.config.temper != 1.0 {
+                for v in &mut ll {
+                    *v *= self.config.temper;
+                }
+            }
             report.observed += 1;
             match self.beliefs.get_mut(set) {
                 None => {

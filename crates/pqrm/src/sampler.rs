@@ -14,6 +14,7 @@ use rand_distr::{Distribution, StandardNormal};
 use rayon::prelude::*;
 
 use crate::observation::{LandmarkId, Scan};
+use crate::sensor::SensorModel;
 
 /// SplitMix64 finaliser: decorrelates the seeds of neighbouring (step, id) pairs.
 #[must_use]
@@ -43,6 +44,19 @@ impl ScanSamples {
     /// has its own generator, so the samples do not depend on the thread count).
     #[must_use]
     pub fn draw(scan: &Scan, samples: usize, seed: u64, step: u64) -> Self {
+        Self::draw_with(scan, samples, seed, step, SensorModel::Gaussian)
+    }
+
+    /// As [`ScanSamples::draw`] under another inverse sensor model (the Gaussian's samples
+    /// are the same bit for bit).
+    #[must_use]
+    pub fn draw_with(
+        scan: &Scan,
+        samples: usize,
+        seed: u64,
+        step: u64,
+        model: SensorModel,
+    ) -> Self {
         let (xs, ys): (Vec<Vec<f64>>, Vec<Vec<f64>>) = scan
             .observations
             .par_iter()
@@ -51,6 +65,14 @@ impl ScanSamples {
                 let [l11, l21, l22] = o.cholesky();
                 let mut x = Vec::with_capacity(samples);
                 let mut y = Vec::with_capacity(samples);
+                if model != SensorModel::Gaussian {
+                    for _ in 0..samples {
+                        let p = model.sample(&mut rng, o.mean, [l11, l21, l22]);
+                        x.push(p[0]);
+                        y.push(p[1]);
+                    }
+                    return (x, y);
+                }
                 for _ in 0..samples {
                     let z1: f64 = StandardNormal.sample(&mut rng);
                     let z2: f64 = StandardNormal.sample(&mut rng);

@@ -70,14 +70,18 @@ pub(crate) struct Pqrm {
 #[pymethods]
 impl Pqrm {
     /// An empty map over `calculus`.
+    /// `sensor` is "gaussian", "student-t:NU" or "outliers:RATE,SPREAD"; `temper` ∈ (0, 1]
+    /// scales each step's log-likelihood.
     #[new]
-    #[pyo3(signature = (calculus, *, samples = 1000, floor = 1.0, orderings = "all", seed = 0))]
+    #[pyo3(signature = (calculus, *, samples = 1000, floor = 1.0, orderings = "all", seed = 0, sensor = "gaussian", temper = 1.0))]
     fn new(
         calculus: &Calculus,
         samples: usize,
         floor: f64,
         orderings: &str,
         seed: u64,
+        sensor: &str,
+        temper: f64,
     ) -> PyResult<Self> {
         let orderings = match orderings {
             "all" => Orderings::All,
@@ -93,6 +97,8 @@ impl Pqrm {
             floor,
             orderings,
             seed,
+            sensor: pqrm::sensor::SensorModel::parse(sensor).map_err(perr)?,
+            temper,
         };
         pqrm::Pqrm::new(calculus.inner.clone(), config)
             .map(|inner| Self { inner })

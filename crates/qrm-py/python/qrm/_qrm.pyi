@@ -123,6 +123,8 @@ class Pqrm:
         floor: float = 1.0,
         orderings: str = "all",
         seed: int = 0,
+        sensor: str = "gaussian",
+        temper: float = 1.0,
     ) -> Pqrm: ...
     def update(
         self,
