@@ -72,6 +72,9 @@ pub enum PqrmCmd {
     /// Merge maps of one calculus (e.g. one per robot) by adding their log-likelihoods: no
     /// common frame needed.
     Merge(MergeArgs),
+    /// Fit the sensor's range/bearing noise and outlier rate from the recording itself (the
+    /// spread of distances between landmarks seen together; no ground truth needed).
+    Calibrate(CalibrateArgs),
 }
 
 /// `qrm pqrm study`.
@@ -121,6 +124,10 @@ pub struct RealArgs {
     /// Bearing noise model (rad).
     #[arg(long, default_value_t = pqrm::loaders::RangeBearingNoise::MRCLAM.sigma_bearing)]
     pub sigma_bearing: f64,
+    /// `auto`: fit the noise from the recording itself (`qrm pqrm calibrate`) and use it;
+    /// `fixed`: use --sigma-range/--sigma-bearing.
+    #[arg(long, default_value = "auto")]
+    pub noise: String,
     /// Use only the first N frames (with three or more landmarks).
     #[arg(long)]
     pub max_frames: Option<usize>,
@@ -135,6 +142,20 @@ pub struct RealArgs {
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
     /// Output directory.
+    #[arg(long)]
+    pub out: PathBuf,
+}
+
+/// `qrm pqrm calibrate`.
+#[derive(Debug, clap::Args)]
+pub struct CalibrateArgs {
+    /// Input format: csv, mrclam, g2o or mcap.
+    #[arg(long)]
+    pub format: String,
+    /// Input file or directory.
+    #[arg(long)]
+    pub input: PathBuf,
+    /// Output directory (calibration.json, residuals.svg/png).
     #[arg(long)]
     pub out: PathBuf,
 }
@@ -205,6 +226,10 @@ pub struct MapArgs {
     /// Bearing noise for range-bearing formats (rad).
     #[arg(long, default_value_t = pqrm::loaders::RangeBearingNoise::MRCLAM.sigma_bearing)]
     pub sigma_bearing: f64,
+    /// Range-bearing formats: `auto` fits the noise from the recording itself (as `qrm pqrm
+    /// calibrate`) instead of --sigma-range/--sigma-bearing.
+    #[arg(long, default_value = "fixed")]
+    pub noise: String,
     /// Samples per landmark per step.
     #[arg(long, default_value_t = 1000)]
     pub samples: usize,

@@ -64,7 +64,7 @@ pub fn run(a: ConvertArgs) -> Result<()> {
         .with_context(|| format!("moving the log to {}", a.out.display()))?;
     drop(stage);
     let robots: std::collections::BTreeSet<u32> = data.scans.iter().map(|s| s.robot).collect();
-    println!(
+    outln!(
         "{}: {} scans of {} robot(s){}; wrote {}",
         a.input.display(),
         data.scans.len(),
@@ -75,6 +75,6 @@ pub fn run(a: ConvertArgs) -> Result<()> {
             ""
         },
         a.out.display()
-    );
+    )?;
     Ok(())
 }

@@ -293,21 +293,21 @@ pub fn run(a: DemoArgs) -> Result<()> {
         &out_dir.join("summary.json"),
         serde_json::to_string_pretty(&summary)?.as_bytes(),
     )?;
-    println!("qrm demo (seed {}):", a.seed);
-    println!(
+    outln!("qrm demo (seed {}):", a.seed)?;
+    outln!(
         "  mapped the field site with the lidar: {} frames, {} landmarks recognised, {} map elements",
         frames.len(),
         assoc.len(),
         map.elements().len()
-    );
+    )?;
     if let Some(c) = &learned {
-        println!(
+        outln!(
             "  SERGE learned a calculus with {} states from {} triplets ({t_serge:.1} s)",
             c.n_states(),
             triplets.len()
-        );
+        )?;
     }
-    println!(
+    outln!(
         "  Q-Link to landmark {goal}: {} — |P| = {}, {} re-plans, {:.1} m driven (Prop. 2 bound {:.0} m)",
         if outcome.success {
             "reached"
@@ -318,12 +318,12 @@ pub fn run(a: DemoArgs) -> Result<()> {
         outcome.replans,
         outcome.length,
         outcome.bound
-    );
-    println!(
+    )?;
+    outln!(
         "  wrote {} (open run.mcap in Foxglove) in {:.1} s",
         a.out.display(),
         t0.elapsed().as_secs_f64()
-    );
+    )?;
     stage.commit()?;
     Ok(())
 }

@@ -104,13 +104,20 @@ pub fn run(a: FieldArgs) -> Result<()> {
     let secs = t0.elapsed().as_secs_f64();
     let flat: Vec<FieldTrial> = trials.iter().map(|(_, t)| t.clone()).collect();
     let pooled = summarise(&flat, &variants);
-    println!(
+    outln!(
         "{:<30} {:>7} {:>8} {:>9} {:>9} {:>13} {:>9} {:>9}",
-        "variant", "trials", "no_path", "success", "pooled", "per world", "aliasing", "features"
-    );
+        "variant",
+        "trials",
+        "no_path",
+        "success",
+        "pooled",
+        "per world",
+        "aliasing",
+        "features"
+    )?;
     for x in &pooled {
         let (mean, sd) = world_rates(&worlds, x.variant);
-        println!(
+        outln!(
             "{:<30} {:>7} {:>8} {:>9} {:>8.1}% {:>6.1} ± {:>4.1} {:>9} {:>9}",
             x.variant.name(),
             x.trials,
@@ -121,15 +128,15 @@ pub fn run(a: FieldArgs) -> Result<()> {
             100.0 * sd,
             x.perceptual_aliasing,
             x.insufficient_features + x.insufficient_features_and_aliasing
-        );
+        )?;
     }
     write_outputs(&out_dir, &params, &field, &worlds, &trials, &pooled, secs)?;
-    println!(
+    outln!(
         "thesis: 13 of 18 (72 %); {} world(s) × {} trials in {secs:.1} s; wrote {}",
         n_worlds,
         params.trials,
         a.out.display()
-    );
+    )?;
     stage.commit()?;
     Ok(())
 }

@@ -6,6 +6,19 @@
 //! lives in the library crates; this crate formats, writes files and reports errors (each
 //! error once, at the top, with its chain).
 
+/// `println!` that returns the write error instead of panicking. A closed pipe (`qrm … | head`)
+/// is not an error: the command goes on, writes its files and exits 0; any other error is
+/// reported.
+macro_rules! outln {
+    ($($arg:tt)*) => {{
+        use std::io::Write as _;
+        match writeln!(std::io::stdout().lock(), $($arg)*) {
+            Err(e) if e.kind() == std::io::ErrorKind::BrokenPipe => Ok(()),
+            other => other,
+        }
+    }};
+}
+
 mod args;
 mod binary_cmd;
 mod calculus_cmd;

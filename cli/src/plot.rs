@@ -358,7 +358,7 @@ where
     chart
         .configure_mesh()
         .x_desc(xl)
-        .y_desc("fraction of landmark sets")
+        .y_desc("fraction")
         .label_style(("sans-serif", 13))
         .draw()?;
     let g = groups.len() as f64;

@@ -15,7 +15,7 @@ use pqrm::{Orderings, Pqrm, PqrmConfig, evaluate};
 use qsr_core::Calculus;
 use serde_json::json;
 
-use crate::args::{MapArgs, MergeArgs, PqrmCmd, RealArgs, StudyArgs};
+use crate::args::{CalibrateArgs, MapArgs, MergeArgs, PqrmCmd, RealArgs, StudyArgs};
 use crate::output::{Staging, write_atomic};
 use crate::plot::{self, Series};
 
@@ -31,6 +31,7 @@ pub fn run(cmd: PqrmCmd) -> Result<()> {
         PqrmCmd::Study(a) => study(a),
         PqrmCmd::Real(a) => real(a),
         PqrmCmd::Merge(a) => merge(a),
+        PqrmCmd::Calibrate(a) => calibrate(a),
     }
 }
 
@@ -102,10 +103,28 @@ pub fn map(a: MapArgs) -> Result<()> {
         temper: a.temper,
     };
     config.validate()?;
-    let noise = RangeBearingNoise {
+    let mut noise = RangeBearingNoise {
         sigma_range: a.sigma_range,
         sigma_bearing: a.sigma_bearing,
     };
+    let mut noise_fit = None;
+    match a.noise.as_str() {
+        "fixed" => {}
+        "auto" => {
+            ensure!(
+                a.format == "mrclam",
+                "--noise auto fits a range-bearing sensor: --format mrclam (the other formats carry their own covariances; `qrm pqrm calibrate` reports a fit for any)"
+            );
+            let fit = pqrm::calibrate::fit_noise(&load_dataset(&a.format, &a.input, noise)?)
+                .context("fitting the noise (--noise auto)")?;
+            noise = RangeBearingNoise {
+                sigma_range: fit.sigma_range,
+                sigma_bearing: fit.sigma_bearing,
+            };
+            noise_fit = Some(fit);
+        }
+        other => bail!("unknown --noise `{other}` (fixed, auto)"),
+    }
     // The loaders' errors name the file and line (or topic, message and field) themselves.
     let mut log_read = None;
     let mut data = if a.format == "mcap" {
@@ -148,6 +167,9 @@ pub fn map(a: MapArgs) -> Result<()> {
     }
     // What the log reader did goes into every summary.
     let mut extra = serde_json::Map::new();
+    if let Some(fit) = &noise_fit {
+        extra.insert("noise_fit".into(), json!(fit));
+    }
     if let Some(r) = &log_read {
         let used: Vec<_> = r
             .topics
@@ -200,8 +222,9 @@ pub fn map(a: MapArgs) -> Result<()> {
     } else {
         map_into(&out_dir, &data, &calc, config, &extra, "mapping")?
     };
-    println!("{}", serde_json::to_string_pretty(&summary)?);
+    // Committed before printing: a closed pipe must not lose the result.
     stage.commit()?;
+    outln!("{}", serde_json::to_string_pretty(&summary)?)?;
     Ok(())
 }
 
@@ -265,6 +288,47 @@ fn score_into(obj: &mut serde_json::Map<String, serde_json::Value>, m: &pqrm::Ma
     obj.insert("normalized_entropy".into(), json!(m.normalized_entropy));
 }
 
+/// `qrm pqrm calibrate`.
+fn calibrate(a: CalibrateArgs) -> Result<()> {
+    let data = load_dataset(&a.format, &a.input, RangeBearingNoise::MRCLAM)?;
+    let fit = pqrm::calibrate::fit_noise(&data)
+        .with_context(|| format!("fitting the noise of {}", a.input.display()))?;
+    let z: Vec<f64> = pqrm::calibrate::residuals(&data, &fit)
+        .iter()
+        .filter(|r| r.sigma > 0.0)
+        .map(|r| (r.residual / r.sigma).clamp(-8.0, 8.0))
+        .collect();
+    let stage = Staging::new(&a.out)?;
+    let out_dir = stage.path().to_path_buf();
+    let summary = json!({
+        "input": a.input.display().to_string(),
+        "format": a.format,
+        "fit": fit,
+        "method": "spread of the distance between landmarks seen in one frame about its median over frames; IRLS on |z| <= 3; outlier rate = share beyond 3 sigma minus 0.27 %",
+        "use": format!("qrm map --format {} --input {} --noise auto  (or --sigma-range {:.4} --sigma-bearing {:.5} --sensor outliers:{:.3},{:.0})",
+            a.format, a.input.display(), fit.sigma_range, fit.sigma_bearing, fit.outlier_rate, fit.max_range.ceil()),
+    });
+    write_atomic(
+        &out_dir.join("calibration.json"),
+        serde_json::to_string_pretty(&summary)?.as_bytes(),
+    )?;
+    let edges: Vec<f64> = (0..=32).map(|i| -8.0 + 0.5 * f64::from(i)).collect();
+    plot::histogram(
+        &out_dir.join("residuals"),
+        &format!(
+            "residual / fitted σ (N(0,1) if the model is right; {:.1} % beyond ±3)",
+            100.0 * z.iter().filter(|v| v.abs() > 3.0).count() as f64 / z.len().max(1) as f64
+        ),
+        "normalised residual of a pairwise distance (clamped to ±8)",
+        &edges,
+        &[("residuals".to_owned(), z)],
+    )?;
+    // Committed before printing: a closed pipe must not lose the result.
+    stage.commit()?;
+    outln!("{}", serde_json::to_string_pretty(&summary)?)?;
+    Ok(())
+}
+
 /// `qrm pqrm merge`.
 fn merge(a: MergeArgs) -> Result<()> {
     let maps = a
@@ -297,7 +361,7 @@ fn merge(a: MergeArgs) -> Result<()> {
         score_into(obj, &evaluate(&merged, truth)?);
     }
     write_atomic(&a.out, merged.to_json()?.as_bytes())?;
-    println!("{}", serde_json::to_string_pretty(&summary)?);
+    outln!("{}", serde_json::to_string_pretty(&summary)?)?;
     Ok(())
 }
 
@@ -336,12 +400,18 @@ fn study(a: StudyArgs) -> Result<()> {
     pb.finish_and_clear();
     let secs = start.elapsed().as_secs_f64();
     write_study(&out_dir, &result, secs)?;
-    println!(
+    outln!(
         "{:<14} {:>7} {:>7} {:>9} {:>9} {:>8} {:>8}",
-        "calculus", "σ_R", "σ_N", "entropy", "err", "P(ML)", "nd"
-    );
+        "calculus",
+        "σ_R",
+        "σ_N",
+        "entropy",
+        "err",
+        "P(ML)",
+        "nd"
+    )?;
     for l in &result.levels {
-        println!(
+        outln!(
             "{:<14} {:>7.1} {:>7.3} {:>9.3} {:>9.3} {:>8.3} {:>8.3}",
             l.calculus,
             l.sigma_r,
@@ -350,9 +420,9 @@ fn study(a: StudyArgs) -> Result<()> {
             l.error_rate.mean,
             l.p_ml.mean,
             l.neighbor_distance.mean
-        );
+        )?;
     }
-    println!("{} trials in {secs:.1} s; wrote {}", total, a.out.display());
+    outln!("{} trials in {secs:.1} s; wrote {}", total, a.out.display())?;
     stage.commit()?;
     Ok(())
 }
@@ -813,12 +883,26 @@ fn real(a: RealArgs) -> Result<()> {
         .input
         .clone()
         .unwrap_or_else(|| PathBuf::from("../shared/data/mrclam-dataset7"));
-    let noise = RangeBearingNoise {
+    let mut noise = RangeBearingNoise {
         sigma_range: a.sigma_range,
         sigma_bearing: a.sigma_bearing,
     };
     let mut data = load_dataset("mrclam", &input, noise)
         .context("loading the recording (choose it with --input DIR)")?;
+    let noise_fit = match a.noise.as_str() {
+        "fixed" => None,
+        "auto" => {
+            let fit =
+                pqrm::calibrate::fit_noise(&data).context("fitting the noise (--noise auto)")?;
+            noise = RangeBearingNoise {
+                sigma_range: fit.sigma_range,
+                sigma_bearing: fit.sigma_bearing,
+            };
+            data = load_dataset("mrclam", &input, noise)?;
+            Some(fit)
+        }
+        other => bail!("unknown --noise `{other}` (fixed, auto)"),
+    };
     data.scans.retain(|s| s.observations.len() >= 3);
     if let Some(n) = a.max_frames {
         data.scans.truncate(n);
@@ -887,7 +971,7 @@ fn real(a: RealArgs) -> Result<()> {
         &results,
         &check,
         data.scans.len(),
-        noise,
+        (noise, noise_fit.as_ref()),
         secs,
     )?;
     write_robots(&out_dir, &robots)?;
@@ -899,12 +983,18 @@ fn real(a: RealArgs) -> Result<()> {
     let sweep = pqrm::study::sensor_sweep(&data, &calculi, config, &variants, &|| pb.inc(1))?;
     pb.finish_and_clear();
     write_sweep(&out_dir, &sweep)?;
-    println!(
+    outln!(
         "{:<14} {:>6} {:>9} {:>9} {:>9} {:>9} {:>9}",
-        "calculus", "sets", "entropy", "err", "majority", "nd", "random"
-    );
+        "calculus",
+        "sets",
+        "entropy",
+        "err",
+        "majority",
+        "nd",
+        "random"
+    )?;
     for r in &results {
-        println!(
+        outln!(
             "{:<14} {:>6} {:>9.3} {:>9.3} {:>9.3} {:>9.3} {:>9.3}",
             r.calculus,
             r.pqrm.n_sets,
@@ -913,14 +1003,14 @@ fn real(a: RealArgs) -> Result<()> {
             r.majority.error_rate,
             r.pqrm.mean_neighbor_distance,
             r.random.error_rate
-        );
+        )?;
     }
-    println!(
+    outln!(
         "noise model check: z std {:.2} (1 if right), {:.1}% beyond 3σ; wrote {}",
         check.z_std,
         100.0 * check.outlier_fraction,
         a.out.display()
-    );
+    )?;
     stage.commit()?;
     Ok(())
 }
@@ -1064,13 +1154,13 @@ fn write_real(
     results: &[RealCalculusResult],
     check: &pqrm::study::NoiseCheck,
     frames: usize,
-    noise: RangeBearingNoise,
+    (noise, fit): (RangeBearingNoise, Option<&pqrm::calibrate::NoiseFit>),
     secs: f64,
 ) -> Result<()> {
     write_atomic(
         &out.join("real.json"),
         serde_json::to_string_pretty(
-            &json!({"results": results, "noise_check": check, "frames": frames}),
+            &json!({"results": results, "noise_check": check, "frames": frames, "noise": {"sigma_range": noise.sigma_range, "sigma_bearing": noise.sigma_bearing}, "noise_fit": fit}),
         )?
         .as_bytes(),
     )?;
@@ -1176,8 +1266,19 @@ fn write_real(
     }
     let _ = writeln!(
         s,
-        "{frames} frames with three or more landmarks; noise model σ_r = {} m, σ_b = {} rad; {:.1} s.\n",
-        noise.sigma_range, noise.sigma_bearing, secs
+        "{frames} frames with three or more landmarks; noise model σ_r = {:.4} m, σ_b = {:.5} rad ({}); {:.1} s.\n",
+        noise.sigma_range,
+        noise.sigma_bearing,
+        fit.map_or_else(
+            || "given with --noise fixed".to_owned(),
+            |f| format!(
+                "fitted from the recording without ground truth, `--noise auto`: {} residuals of {} landmark pairs, outlier rate {:.1} %",
+                f.residuals,
+                f.pairs,
+                100.0 * f.outlier_rate
+            )
+        ),
+        secs
     );
     let _ = writeln!(
         s,

@@ -104,18 +104,24 @@ fn study(a: StudyArgs) -> Result<()> {
     let (records, infos) = run_study(&config, &|n| pb.inc_length(n as u64), &|| pb.inc(1))?;
     pb.finish_and_clear();
     for i in &infos {
-        println!("map: {}", describe(i));
+        outln!("map: {}", describe(i))?;
     }
     let secs = t0.elapsed().as_secs_f64();
     let rows = table(&records);
     write_outputs(&out_dir, &records, &rows, &config, &infos, secs)?;
-    println!(
+    outln!(
         "{:<13} {:>6} {:>7} {:>8} {:>9} {:>9} {:>8}",
-        "trial", "value", "pairs", "no_path", "failures", "rate", "thesis"
-    );
+        "trial",
+        "value",
+        "pairs",
+        "no_path",
+        "failures",
+        "rate",
+        "thesis"
+    )?;
     for r in &rows {
         let thesis = thesis_rate(r);
-        println!(
+        outln!(
             "{:<13} {:>6} {:>7} {:>8} {:>9} {:>8.1}% {:>8}",
             r.trial,
             r.value,
@@ -124,9 +130,9 @@ fn study(a: StudyArgs) -> Result<()> {
             r.failures,
             100.0 * r.failure_rate,
             thesis
-        );
+        )?;
     }
-    println!("study in {secs:.1} s; wrote {}", a.out.display());
+    outln!("study in {secs:.1} s; wrote {}", a.out.display())?;
     stage.commit()?;
     Ok(())
 }

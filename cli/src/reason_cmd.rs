@@ -256,7 +256,7 @@ fn close_binary_network(args: &NetworkArgs) -> Result<()> {
         "consistent": closed.is_consistent(),
         "constraints": closed.network.constraints_json(),
     });
-    println!("{out}");
+    outln!("{out}")?;
     Ok(())
 }
 
@@ -299,7 +299,7 @@ pub fn run(cmd: ReasonCmd) -> Result<()> {
                 "consistent": closed.is_consistent(),
                 "constraints": closed.network.constraints_json(),
             });
-            println!("{out}");
+            outln!("{out}")?;
             Ok(())
         }
         ReasonCmd::Scenario(args) => {
@@ -309,14 +309,14 @@ pub fn run(cmd: ReasonCmd) -> Result<()> {
             };
             match find_scenario(network, &algebra, &options)? {
                 ScenarioOutcome::Found(s) => {
-                    println!(
+                    outln!(
                         "{}",
                         json!({"consistent": true, "constraints": s.constraints_json()})
-                    );
+                    )?;
                     Ok(())
                 }
                 ScenarioOutcome::None => {
-                    println!("{}", json!({"consistent": false, "constraints": null}));
+                    outln!("{}", json!({"consistent": false, "constraints": null}))?;
                     Ok(())
                 }
                 ScenarioOutcome::GaveUp { nodes } => bail!(
@@ -345,8 +345,8 @@ fn export(args: &ExportArgs) -> Result<()> {
     };
     let net = pqrm::reason::to_network(&map, selection)?;
     match args.format {
-        NetworkFormat::Json => println!("{}", net.to_json()),
-        NetworkFormat::Sparq => println!("{}", net.to_sparq()),
+        NetworkFormat::Json => outln!("{}", net.to_json())?,
+        NetworkFormat::Sparq => outln!("{}", net.to_sparq())?,
     }
     Ok(())
 }
@@ -355,32 +355,32 @@ fn check(args: &CheckArgs) -> Result<()> {
     let map = load_map(&args.map)?;
     let result = pqrm::reason::check(&map)?;
     if args.json {
-        println!("{}", serde_json::to_string_pretty(&result)?);
+        outln!("{}", serde_json::to_string_pretty(&result)?)?;
         return Ok(());
     }
-    println!(
+    outln!(
         "{} sets of `{}`: the most likely states {} closure",
         result.sets,
         map.calculus().name(),
         if result.consistent { "pass" } else { "fail" }
-    );
+    )?;
     if let Some(c) = &result.contradiction {
-        println!("first contradiction: {c}");
+        outln!("first contradiction: {c}")?;
     }
     if !result.flagged.is_empty() {
-        println!(
+        outln!(
             "{} entries to relax (irreducible, chosen greedily by belief; {} closures):",
             result.flagged.len(),
             result.closures
-        );
-        println!("{:<18} {:<16} {:>8}", "set", "ML state", "P(ML)");
+        )?;
+        outln!("{:<18} {:<16} {:>8}", "set", "ML state", "P(ML)")?;
         for f in &result.flagged {
-            println!(
+            outln!(
                 "{:<18} {:<16} {:>8.4}",
                 format!("{:?}", f.set),
                 f.state,
                 f.p
-            );
+            )?;
         }
     }
     Ok(())
@@ -447,12 +447,12 @@ fn infer(args: &InferArgs) -> Result<()> {
         "inferences": rows,
     });
     write_atomic(&args.out, serde_json::to_string_pretty(&out)?.as_bytes())?;
-    println!(
+    outln!(
         "inferred {} sets of `{}` ({} more informative than uniform); wrote {}",
         sets.len(),
         calc.name(),
         informative,
         args.out.display()
-    );
+    )?;
     Ok(())
 }

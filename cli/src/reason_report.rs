@@ -94,8 +94,8 @@ pub fn study(a: &ReasonStudyArgs) -> Result<()> {
     }
     let report = report(&input, &results, best, secs, data.scans.len());
     write_atomic(&out_dir.join("report.md"), report.as_bytes())?;
-    print_summary(&results);
-    println!(
+    print_summary(&results)?;
+    outln!(
         "{} frames, {:.1} s; lowest log loss: {} fusion; wrote {} (report.md, reason.json, \
          scores.csv, {} figures)",
         data.scans.len(),
@@ -103,7 +103,7 @@ pub fn study(a: &ReasonStudyArgs) -> Result<()> {
         best.name(),
         a.out.display(),
         figures.len()
-    );
+    )?;
     stage.commit()?;
     Ok(())
 }
@@ -189,14 +189,21 @@ fn ratio(v: Option<f64>) -> String {
     v.map_or_else(|| "–".to_owned(), |x| format!("{x:.3}"))
 }
 
-fn print_summary(results: &[ReasonCalculusResult]) {
-    println!(
+fn print_summary(results: &[ReasonCalculusResult]) -> Result<()> {
+    outln!(
         "{:<14} {:<8} {:<24} {:>7} {:>8} {:>8} {:>8} {:>8}",
-        "calculus", "part", "predictor", "n", "err", "top2", "logloss", "ECE"
-    );
+        "calculus",
+        "part",
+        "predictor",
+        "n",
+        "err",
+        "top2",
+        "logloss",
+        "ECE"
+    )?;
     for r in results {
         for (part, pred, s) in rows(r) {
-            println!(
+            outln!(
                 "{:<14} {:<8} {:<24} {:>7} {:>8.3} {:>8.3} {:>8.3} {:>8.3}",
                 r.calculus,
                 part,
@@ -206,10 +213,10 @@ fn print_summary(results: &[ReasonCalculusResult]) {
                 s.top2_error,
                 s.log_loss,
                 s.calibration_error
-            );
+            )?;
         }
         let c = &r.check;
-        println!(
+        outln!(
             "{:<14} check    {} sets, {} wrong; {} flagged, {} of them wrong (precision {}, recall {})",
             r.calculus,
             c.sets,
@@ -218,8 +225,9 @@ fn print_summary(results: &[ReasonCalculusResult]) {
             c.flagged_wrong,
             ratio(c.precision),
             ratio(c.recall)
-        );
+        )?;
     }
+    Ok(())
 }
 
 fn report(

@@ -193,7 +193,7 @@ fn run_map(a: RunArgs) -> Result<()> {
         &map,
         &means,
     )?;
-    println!(
+    outln!(
         "{} beliefs, {} initial regions → {} regions; log saliency {:.4}; log φ {:.4}; {} trials in {secs:.2} s; wrote {}",
         beliefs.len(),
         serge.n_initial_regions(),
@@ -202,7 +202,7 @@ fn run_map(a: RunArgs) -> Result<()> {
         map.log_phi(),
         map.trials,
         a.out.display()
-    );
+    )?;
     stage.commit()?;
     Ok(())
 }
@@ -259,12 +259,12 @@ fn study(a: StudyArgs) -> Result<()> {
         let summary = summarise(&records);
         write_records(&dir, &records, &summary)?;
         let (examples, extra) = examples(&dir, &data, &config)?;
-        println!(
+        outln!(
             "{name}: K = {}, {} SERGE runs in {:.1} s",
             data.len(),
             records.len(),
             t0.elapsed().as_secs_f64()
-        );
+        )?;
         results.push(DatasetResult {
             name: name.to_owned(),
             k: data.len(),
@@ -278,23 +278,33 @@ fn study(a: StudyArgs) -> Result<()> {
     plot_fig_3_7(&out_dir, &results)?;
     let report = report(&results, &config, a.quick, secs);
     write_atomic(&out_dir.join("report.md"), report.as_bytes())?;
-    println!(
+    outln!(
         "{:<15} {:>6} {:>5} {:>7} {:>9} {:>8}",
-        "dataset", "sweep", "μ", "σ", "|R|", "error"
-    );
+        "dataset",
+        "sweep",
+        "μ",
+        "σ",
+        "|R|",
+        "error"
+    )?;
     for r in &results {
         for s in r
             .summary
             .iter()
             .filter(|s| s.sweep == "sigma" || s.mu % 10 == 0 || s.mu == 1)
         {
-            println!(
+            outln!(
                 "{:<15} {:>6} {:>5} {:>7.2} {:>9.2} {:>8.4}",
-                r.name, s.sweep, s.mu, s.sigma, s.n_regions.0, s.error_rate.0
-            );
+                r.name,
+                s.sweep,
+                s.mu,
+                s.sigma,
+                s.n_regions.0,
+                s.error_rate.0
+            )?;
         }
     }
-    println!("study in {secs:.1} s; wrote {}", a.out.display());
+    outln!("study in {secs:.1} s; wrote {}", a.out.display())?;
     stage.commit()?;
     Ok(())
 }
@@ -933,7 +943,7 @@ fn learn(a: LearnArgs) -> Result<()> {
         &map,
         &points,
     )?;
-    println!(
+    outln!(
         "{} triplets, {} observations → `{}` with {} states, compose {} entries, in {:.1} s; wrote {}",
         triplets.len(),
         obs.len(),
@@ -942,7 +952,7 @@ fn learn(a: LearnArgs) -> Result<()> {
         table.n_entries(),
         start.elapsed().as_secs_f64(),
         a.out.display()
-    );
+    )?;
     stage.commit()?;
     Ok(())
 }

@@ -127,7 +127,7 @@ pub fn run(a: SimArgs) -> Result<()> {
         &rays,
     )?;
     let detections: usize = frames.iter().map(|f| f.detections.len()).sum();
-    println!(
+    outln!(
         "{}: {} frames, {} detections, {} landmarks, {} walls; wrote {}",
         a.scenario,
         frames.len(),
@@ -135,7 +135,7 @@ pub fn run(a: SimArgs) -> Result<()> {
         sc.world.spec().landmarks.len(),
         sc.world.spec().walls.len(),
         a.out.display()
-    );
+    )?;
     stage.commit()?;
     Ok(())
 }

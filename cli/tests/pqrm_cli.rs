@@ -559,3 +559,75 @@ fn per_robot_maps_merge_into_the_pooled_map() {
     assert!(String::from_utf8_lossy(&o.stderr).contains("cannot merge"));
     std::fs::remove_dir_all(&out).ok();
 }
+
+#[test]
+fn calibrate_fits_the_noise_without_truth_and_map_uses_it_with_noise_auto() {
+    let Some(data) = mrclam() else {
+        eprintln!("SKIPPED: shared/data/mrclam-dataset7 not found");
+        return;
+    };
+    let out = tmp("calibrate");
+    let d = data.to_str().unwrap();
+    let cal = out.join("cal");
+    let text = ok(
+        &[
+            "pqrm",
+            "calibrate",
+            "--format",
+            "mrclam",
+            "--input",
+            d,
+            "--out",
+            cal.to_str().unwrap(),
+        ],
+        "",
+    );
+    let v: serde_json::Value = serde_json::from_str(&text).unwrap();
+    let (sr, sb) = (
+        v["fit"]["sigma_range"].as_f64().unwrap(),
+        v["fit"]["sigma_bearing"].as_f64().unwrap(),
+    );
+    // MRCLAM's README: median absolute errors of ~0.1 m and ~0.006 rad, i.e. σ of order
+    // 0.15 m and 0.009 rad for a Gaussian; the fit must land in that range, not at 0 or ∞.
+    assert!(
+        (0.02..0.3).contains(&sr) && (0.0005..0.03).contains(&sb),
+        "{text}"
+    );
+    assert!(cal.join("residuals.svg").exists() && cal.join("calibration.json").exists());
+    let m = ok(
+        &[
+            "map",
+            "--format",
+            "mrclam",
+            "--input",
+            d,
+            "--noise",
+            "auto",
+            "--samples",
+            "200",
+            "--out",
+            out.join("m").to_str().unwrap(),
+        ],
+        "",
+    );
+    let m: serde_json::Value = serde_json::from_str(&m).unwrap();
+    assert_eq!(m["noise_fit"]["sigma_range"].as_f64().unwrap(), sr);
+    let o = qrm(
+        &[
+            "map",
+            "--format",
+            "csv",
+            "--input",
+            d,
+            "--noise",
+            "auto",
+            "--out",
+            out.join("x").to_str().unwrap(),
+        ],
+        "",
+    );
+    assert!(
+        String::from_utf8_lossy(&o.stderr).contains("--noise auto fits a range-bearing sensor")
+    );
+    std::fs::remove_dir_all(&out).ok();
+}

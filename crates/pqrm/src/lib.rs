@@ -36,6 +36,7 @@
 //! # Ok::<(), pqrm::PqrmError>(())
 //! ```
 
+pub mod calibrate;
 pub mod calibration;
 pub mod error;
 pub mod likelihood;
