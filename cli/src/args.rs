@@ -128,6 +128,11 @@ pub struct RealArgs {
     /// `fixed`: use --sigma-range/--sigma-bearing.
     #[arg(long, default_value = "auto")]
     pub noise: String,
+    /// Drop gross outliers frame by frame (a detection whose distances to the frame's other
+    /// landmarks disagree with those pairs' medians by more than 3σ of the fitted noise); the
+    /// count goes into real.json and the report. `--gate false` keeps every detection.
+    #[arg(long, default_value_t = true, action = clap::ArgAction::Set)]
+    pub gate: bool,
     /// Use only the first N frames (with three or more landmarks).
     #[arg(long)]
     pub max_frames: Option<usize>,
@@ -230,6 +235,11 @@ pub struct MapArgs {
     /// calibrate`) instead of --sigma-range/--sigma-bearing.
     #[arg(long, default_value = "fixed")]
     pub noise: String,
+    /// Drop gross outliers frame by frame (a detection whose distances to the frame's other
+    /// landmarks disagree with those pairs' medians by more than 3σ of the fitted noise); the
+    /// count goes into summary.json.
+    #[arg(long)]
+    pub gate: bool,
     /// Samples per landmark per step.
     #[arg(long, default_value_t = 1000)]
     pub samples: usize,

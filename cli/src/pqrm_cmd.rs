@@ -155,6 +155,16 @@ pub fn map(a: MapArgs) -> Result<()> {
     if let Some(t) = &a.truth {
         data.truth = Some(read_truth_csv(t)?);
     }
+    let mut gated = None;
+    if a.gate {
+        let fit = match &noise_fit {
+            Some(f) => *f,
+            None => pqrm::calibrate::fit_noise(&data).context("fitting the noise for --gate")?,
+        };
+        let (kept, g) = pqrm::calibrate::gate_outliers(&data, &fit, 3.0);
+        data.scans = kept.scans;
+        gated = Some(g);
+    }
     if !a.robots.is_empty() {
         let present: std::collections::BTreeSet<u32> = data.scans.iter().map(|s| s.robot).collect();
         if let Some(r) = a.robots.iter().find(|r| !present.contains(r)) {
@@ -169,6 +179,9 @@ pub fn map(a: MapArgs) -> Result<()> {
     let mut extra = serde_json::Map::new();
     if let Some(fit) = &noise_fit {
         extra.insert("noise_fit".into(), json!(fit));
+    }
+    if let Some(g) = &gated {
+        extra.insert("gated".into(), json!(g));
     }
     if let Some(r) = &log_read {
         let used: Vec<_> = r
@@ -903,6 +916,21 @@ fn real(a: RealArgs) -> Result<()> {
         }
         other => bail!("unknown --noise `{other}` (fixed, auto)"),
     };
+    let gated = if a.gate {
+        let fit = match &noise_fit {
+            Some(f) => *f,
+            None => pqrm::calibrate::fit_noise(&data).context("fitting the noise for --gate")?,
+        };
+        let (kept, g) = pqrm::calibrate::gate_outliers(&data, &fit, 3.0);
+        data.scans = kept.scans;
+        eprintln!(
+            "gated {} of {} detections as gross outliers",
+            g.detections, g.of
+        );
+        Some(g)
+    } else {
+        None
+    };
     data.scans.retain(|s| s.observations.len() >= 3);
     if let Some(n) = a.max_frames {
         data.scans.truncate(n);
@@ -971,7 +999,7 @@ fn real(a: RealArgs) -> Result<()> {
         &results,
         &check,
         data.scans.len(),
-        (noise, noise_fit.as_ref()),
+        (noise, noise_fit.as_ref(), gated),
         secs,
     )?;
     write_robots(&out_dir, &robots)?;
@@ -1154,13 +1182,17 @@ fn write_real(
     results: &[RealCalculusResult],
     check: &pqrm::study::NoiseCheck,
     frames: usize,
-    (noise, fit): (RangeBearingNoise, Option<&pqrm::calibrate::NoiseFit>),
+    (noise, fit, gated): (
+        RangeBearingNoise,
+        Option<&pqrm::calibrate::NoiseFit>,
+        Option<pqrm::calibrate::Gated>,
+    ),
     secs: f64,
 ) -> Result<()> {
     write_atomic(
         &out.join("real.json"),
         serde_json::to_string_pretty(
-            &json!({"results": results, "noise_check": check, "frames": frames, "noise": {"sigma_range": noise.sigma_range, "sigma_bearing": noise.sigma_bearing}, "noise_fit": fit}),
+            &json!({"results": results, "noise_check": check, "frames": frames, "noise": {"sigma_range": noise.sigma_range, "sigma_bearing": noise.sigma_bearing}, "noise_fit": fit, "gated": gated}),
         )?
         .as_bytes(),
     )?;
@@ -1280,6 +1312,13 @@ fn write_real(
         ),
         secs
     );
+    if let Some(g) = gated {
+        let _ = writeln!(
+            s,
+            "Gross outliers gated (`--gate`: a detection whose distances to its frame's other landmarks are off their medians by > 3σ): {} of {} detections.\n",
+            g.detections, g.of
+        );
+    }
     let _ = writeln!(
         s,
         "| calculus | sets | PQRM entropy | PQRM error | majority vote error | per-frame error | random error | PQRM neighbour distance | top-2 error |\n|---|---|---|---|---|---|---|---|---|"

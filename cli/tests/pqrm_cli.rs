@@ -631,3 +631,36 @@ fn calibrate_fits_the_noise_without_truth_and_map_uses_it_with_noise_auto() {
     );
     std::fs::remove_dir_all(&out).ok();
 }
+
+#[test]
+fn gating_drops_a_few_detections_and_says_how_many() {
+    let Some(data) = mrclam() else {
+        eprintln!("SKIPPED: shared/data/mrclam-dataset7 not found");
+        return;
+    };
+    let out = tmp("gate");
+    let s = ok(
+        &[
+            "map",
+            "--format",
+            "mrclam",
+            "--input",
+            data.to_str().unwrap(),
+            "--noise",
+            "auto",
+            "--gate",
+            "--samples",
+            "100",
+            "--out",
+            out.to_str().unwrap(),
+        ],
+        "",
+    );
+    let v: serde_json::Value = serde_json::from_str(&s).unwrap();
+    let (g, of) = (
+        v["gated"]["detections"].as_u64().unwrap(),
+        v["gated"]["of"].as_u64().unwrap(),
+    );
+    assert!(g > 0 && (g as f64) < 0.05 * of as f64, "{g} of {of}");
+    std::fs::remove_dir_all(&out).ok();
+}

@@ -195,3 +195,89 @@ pub fn residuals(dataset: &Dataset, fit: &NoiseFit) -> Vec<Residual> {
         })
         .collect()
 }
+
+/// What [`gate_outliers`] removed.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Gated {
+    /// Detections removed.
+    pub detections: usize,
+    /// Detections looked at.
+    pub of: usize,
+}
+
+/// Removes gross outliers frame by frame: a detection whose distances to the other landmarks
+/// of its frame disagree with those pairs' medians over the whole recording (median |z| over
+/// its pairs > `z_max` under `fit`) is dropped. A frame needs three or more other landmarks
+/// with known pairs to judge one, so small frames are kept whole.
+#[must_use]
+pub fn gate_outliers(dataset: &Dataset, fit: &NoiseFit, z_max: f64) -> (Dataset, Gated) {
+    let mut medians: BTreeMap<(u32, u32), Vec<f64>> = BTreeMap::new();
+    for scan in &dataset.scans {
+        for (i, p) in scan.observations.iter().enumerate() {
+            for q in &scan.observations[i + 1..] {
+                let d = (p.mean[0] - q.mean[0]).hypot(p.mean[1] - q.mean[1]);
+                medians.entry((p.id.0, q.id.0)).or_default().push(d);
+            }
+        }
+    }
+    let medians: BTreeMap<(u32, u32), f64> = medians
+        .into_iter()
+        .filter(|(_, v)| v.len() >= MIN_FRAMES_PER_PAIR)
+        .map(|(k, mut v)| {
+            v.sort_by(f64::total_cmp);
+            (k, v[v.len() / 2])
+        })
+        .collect();
+    let mut gated = Gated::default();
+    let mut out = dataset.clone();
+    for scan in &mut out.scans {
+        let obs = &scan.observations;
+        gated.of += obs.len();
+        let keep: Vec<bool> = obs
+            .iter()
+            .map(|p| {
+                let mut z: Vec<f64> = obs
+                    .iter()
+                    .filter(|q| q.id != p.id)
+                    .filter_map(|q| {
+                        let key = if p.id < q.id {
+                            (p.id.0, q.id.0)
+                        } else {
+                            (q.id.0, p.id.0)
+                        };
+                        let m = medians.get(&key)?;
+                        let d = [p.mean[0] - q.mean[0], p.mean[1] - q.mean[1]];
+                        let dist = d[0].hypot(d[1]);
+                        let u = [d[0] / dist, d[1] / dist];
+                        let (mut a, mut b) = (0.0, 0.0);
+                        for m in [p.mean, q.mean] {
+                            let r = m[0].hypot(m[1]);
+                            if r > 0.0 {
+                                let (rad, tan) = (
+                                    (u[0] * m[0] + u[1] * m[1]) / r,
+                                    (-u[0] * m[1] + u[1] * m[0]) / r,
+                                );
+                                a += rad * rad;
+                                b += r * r * tan * tan;
+                            }
+                        }
+                        let s =
+                            (fit.sigma_range.powi(2) * a + fit.sigma_bearing.powi(2) * b).sqrt();
+                        (s > 0.0 && dist.is_finite()).then(|| (dist - m).abs() / s)
+                    })
+                    .collect();
+                if z.len() < 3 {
+                    return true;
+                }
+                z.sort_by(f64::total_cmp);
+                z[z.len() / 2] <= z_max
+            })
+            .collect();
+        let before = scan.observations.len();
+        let mut k = keep.iter();
+        scan.observations.retain(|_| *k.next().unwrap_or(&true));
+        gated.detections += before - scan.observations.len();
+    }
+    out.scans.retain(|s| !s.observations.is_empty());
+    (out, gated)
+}

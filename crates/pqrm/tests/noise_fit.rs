@@ -105,3 +105,25 @@ fn too_little_data_is_a_typed_error() {
     d.scans.truncate(3);
     assert!(fit_noise(&d).is_err());
 }
+
+#[test]
+fn gating_removes_the_outliers_and_keeps_the_honest_detections() {
+    use pqrm::calibrate::gate_outliers;
+    let clean = recording(0.05, 0.01, 0.0, 5);
+    let f = fit_noise(&clean).unwrap();
+    let (_, g) = gate_outliers(&clean, &f, 3.0);
+    assert!(
+        (g.detections as f64) < 0.01 * g.of as f64,
+        "gated {} of {} honest detections",
+        g.detections,
+        g.of
+    );
+    let dirty = recording(0.05, 0.01, 0.05, 5);
+    let f = fit_noise(&dirty).unwrap();
+    let (_, g) = gate_outliers(&dirty, &f, 3.0);
+    let share = g.detections as f64 / g.of as f64;
+    assert!(
+        (0.035..0.07).contains(&share),
+        "gated {share} with 5 % outliers"
+    );
+}
