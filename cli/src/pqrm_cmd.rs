@@ -85,6 +85,51 @@ pub(crate) fn load_dataset(
     })
 }
 
+/// The range-bearing noise to load `input` with: `mode` `fixed` (the given sigmas, else
+/// MRCLAM's defaults) or `auto` (fitted from the recording, `pqrm::calibrate`). Without a mode,
+/// a given sigma means fixed — explicit values win — and otherwise MRCLAM is fitted.
+pub(crate) fn resolve_noise(
+    format: &str,
+    input: &Path,
+    mode: Option<&str>,
+    sigma_range: Option<f64>,
+    sigma_bearing: Option<f64>,
+) -> Result<(RangeBearingNoise, Option<pqrm::calibrate::NoiseFit>)> {
+    let fixed = RangeBearingNoise {
+        sigma_range: sigma_range.unwrap_or(RangeBearingNoise::MRCLAM.sigma_range),
+        sigma_bearing: sigma_bearing.unwrap_or(RangeBearingNoise::MRCLAM.sigma_bearing),
+    };
+    let given = sigma_range.is_some() || sigma_bearing.is_some();
+    let mode = mode.unwrap_or(if given || format != "mrclam" {
+        "fixed"
+    } else {
+        "auto"
+    });
+    match mode {
+        "fixed" => Ok((fixed, None)),
+        "auto" => {
+            ensure!(
+                format == "mrclam",
+                "--noise auto fits a range-bearing sensor: --format mrclam (the other formats carry their own covariances; `qrm pqrm calibrate` reports a fit for any)"
+            );
+            ensure!(
+                !given,
+                "--noise auto fits σ_r and σ_b; drop --sigma-range/--sigma-bearing or say --noise fixed"
+            );
+            let fit = pqrm::calibrate::fit_noise(&load_dataset(format, input, fixed)?)
+                .context("fitting the noise (--noise auto)")?;
+            Ok((
+                RangeBearingNoise {
+                    sigma_range: fit.sigma_range,
+                    sigma_bearing: fit.sigma_bearing,
+                },
+                Some(fit),
+            ))
+        }
+        other => bail!("unknown --noise `{other}` (fixed, auto)"),
+    }
+}
+
 /// `qrm map`.
 pub fn map(a: MapArgs) -> Result<()> {
     let orderings = match a.orderings.as_str() {
@@ -103,28 +148,17 @@ pub fn map(a: MapArgs) -> Result<()> {
         temper: a.temper,
     };
     config.validate()?;
-    let mut noise = RangeBearingNoise {
-        sigma_range: a.sigma_range,
-        sigma_bearing: a.sigma_bearing,
+    let (noise, noise_fit) = if a.format == "mcap" {
+        (RangeBearingNoise::MRCLAM, None)
+    } else {
+        resolve_noise(
+            &a.format,
+            &a.input,
+            a.noise.as_deref(),
+            a.sigma_range,
+            a.sigma_bearing,
+        )?
     };
-    let mut noise_fit = None;
-    match a.noise.as_str() {
-        "fixed" => {}
-        "auto" => {
-            ensure!(
-                a.format == "mrclam",
-                "--noise auto fits a range-bearing sensor: --format mrclam (the other formats carry their own covariances; `qrm pqrm calibrate` reports a fit for any)"
-            );
-            let fit = pqrm::calibrate::fit_noise(&load_dataset(&a.format, &a.input, noise)?)
-                .context("fitting the noise (--noise auto)")?;
-            noise = RangeBearingNoise {
-                sigma_range: fit.sigma_range,
-                sigma_bearing: fit.sigma_bearing,
-            };
-            noise_fit = Some(fit);
-        }
-        other => bail!("unknown --noise `{other}` (fixed, auto)"),
-    }
     // The loaders' errors name the file and line (or topic, message and field) themselves.
     let mut log_read = None;
     let mut data = if a.format == "mcap" {
@@ -896,26 +930,15 @@ fn real(a: RealArgs) -> Result<()> {
         .input
         .clone()
         .unwrap_or_else(|| PathBuf::from("../shared/data/mrclam-dataset7"));
-    let mut noise = RangeBearingNoise {
-        sigma_range: a.sigma_range,
-        sigma_bearing: a.sigma_bearing,
-    };
-    let mut data = load_dataset("mrclam", &input, noise)
-        .context("loading the recording (choose it with --input DIR)")?;
-    let noise_fit = match a.noise.as_str() {
-        "fixed" => None,
-        "auto" => {
-            let fit =
-                pqrm::calibrate::fit_noise(&data).context("fitting the noise (--noise auto)")?;
-            noise = RangeBearingNoise {
-                sigma_range: fit.sigma_range,
-                sigma_bearing: fit.sigma_bearing,
-            };
-            data = load_dataset("mrclam", &input, noise)?;
-            Some(fit)
-        }
-        other => bail!("unknown --noise `{other}` (fixed, auto)"),
-    };
+    let (noise, noise_fit) = resolve_noise(
+        "mrclam",
+        &input,
+        a.noise.as_deref(),
+        a.sigma_range,
+        a.sigma_bearing,
+    )
+    .context("loading the recording (choose it with --input DIR)")?;
+    let mut data = load_dataset("mrclam", &input, noise)?;
     let gated = if a.gate {
         let fit = match &noise_fit {
             Some(f) => *f,
@@ -999,7 +1022,7 @@ fn real(a: RealArgs) -> Result<()> {
         &results,
         &check,
         data.scans.len(),
-        (noise, noise_fit.as_ref(), gated),
+        (noise, noise_fit.as_ref(), gated, data.skipped),
         secs,
     )?;
     write_robots(&out_dir, &robots)?;
@@ -1182,17 +1205,18 @@ fn write_real(
     results: &[RealCalculusResult],
     check: &pqrm::study::NoiseCheck,
     frames: usize,
-    (noise, fit, gated): (
+    (noise, fit, gated, skipped): (
         RangeBearingNoise,
         Option<&pqrm::calibrate::NoiseFit>,
         Option<pqrm::calibrate::Gated>,
+        usize,
     ),
     secs: f64,
 ) -> Result<()> {
     write_atomic(
         &out.join("real.json"),
         serde_json::to_string_pretty(
-            &json!({"results": results, "noise_check": check, "frames": frames, "noise": {"sigma_range": noise.sigma_range, "sigma_bearing": noise.sigma_bearing}, "noise_fit": fit, "gated": gated}),
+            &json!({"results": results, "noise_check": check, "frames": frames, "noise": {"sigma_range": noise.sigma_range, "sigma_bearing": noise.sigma_bearing}, "noise_fit": fit, "gated": gated, "skipped_measurements": skipped}),
         )?
         .as_bytes(),
     )?;
@@ -1312,6 +1336,12 @@ fn write_real(
         ),
         secs
     );
+    if skipped > 0 {
+        let _ = writeln!(
+            s,
+            "Measurements skipped on purpose by the loader (robot-to-robot sightings, barcodes without a surveyed landmark): {skipped}.\n"
+        );
+    }
     if let Some(g) = gated {
         let _ = writeln!(
             s,
