@@ -100,6 +100,7 @@ pub(crate) fn resolve_noise(
         sigma_bearing: sigma_bearing.unwrap_or(RangeBearingNoise::MRCLAM.sigma_bearing),
     };
     let given = sigma_range.is_some() || sigma_bearing.is_some();
+    let chosen = mode.is_some();
     let mode = mode.unwrap_or(if given || format != "mrclam" {
         "fixed"
     } else {
@@ -116,8 +117,23 @@ pub(crate) fn resolve_noise(
                 !given,
                 "--noise auto fits σ_r and σ_b; drop --sigma-range/--sigma-bearing or say --noise fixed"
             );
-            let fit = pqrm::calibrate::fit_noise(&load_dataset(format, input, fixed)?)
-                .context("fitting the noise (--noise auto)")?;
+            let fit = match pqrm::calibrate::fit_noise(&load_dataset(format, input, fixed)?) {
+                Ok(fit) => fit,
+                // The default, not asked for: a recording too short to fit keeps the fixed
+                // noise, with a word; `--noise auto` asked for it, so it is an error.
+                Err(e) if !chosen => {
+                    eprintln!(
+                        "warning: {}: the noise cannot be fitted ({e}); using σ_r = {} m, σ_b = {} rad",
+                        input.display(),
+                        fixed.sigma_range,
+                        fixed.sigma_bearing
+                    );
+                    return Ok((fixed, None));
+                }
+                Err(e) => {
+                    return Err(anyhow::Error::new(e).context("fitting the noise (--noise auto)"));
+                }
+            };
             Ok((
                 RangeBearingNoise {
                     sigma_range: fit.sigma_range,
