@@ -118,17 +118,9 @@ pub struct RealArgs {
     /// Samples per landmark per frame.
     #[arg(long, default_value_t = 1000)]
     pub samples: usize,
-    /// Range noise model (m); given, it wins over the fit.
-    #[arg(long)]
-    pub sigma_range: Option<f64>,
-    /// Bearing noise model (rad); given, it wins over the fit.
-    #[arg(long)]
-    pub sigma_bearing: Option<f64>,
-    /// `auto`: fit the noise from the recording itself (`qrm pqrm calibrate`) and use it;
-    /// `fixed`: use --sigma-range/--sigma-bearing (0.15 m, 0.01 rad if not given). Default:
-    /// auto unless a sigma is given.
-    #[arg(long)]
-    pub noise: Option<String>,
+    /// Range-bearing noise.
+    #[command(flatten)]
+    pub noise: NoiseArgs,
     /// Drop gross outliers frame by frame (a detection whose distances to the frame's other
     /// landmarks disagree with those pairs' medians by more than 3σ of the fitted noise); the
     /// count goes into real.json and the report. `--gate false` keeps every detection.
@@ -150,6 +142,21 @@ pub struct RealArgs {
     /// Output directory.
     #[arg(long)]
     pub out: PathBuf,
+}
+
+/// The range-bearing noise of a recording (MRCLAM), shared by `map`, `pqrm real` and `convert`.
+#[derive(Debug, Clone, clap::Args)]
+pub struct NoiseArgs {
+    /// Range noise (m); given, it wins over the fit (0.15 with `--noise fixed`).
+    #[arg(long)]
+    pub sigma_range: Option<f64>,
+    /// Bearing noise (rad); given, it wins over the fit (0.01 with `--noise fixed`).
+    #[arg(long)]
+    pub sigma_bearing: Option<f64>,
+    /// `auto` fits the noise from the recording itself (as `qrm pqrm calibrate`), `fixed` uses
+    /// --sigma-range/--sigma-bearing. Default: auto for mrclam unless a sigma is given.
+    #[arg(long = "noise")]
+    pub mode: Option<String>,
 }
 
 /// `qrm pqrm calibrate`.
@@ -226,19 +233,9 @@ pub struct MapArgs {
     /// Ground truth `landmark,x,y` CSV (MRCLAM brings its own).
     #[arg(long)]
     pub truth: Option<PathBuf>,
-    /// Range noise for range-bearing formats (m); given, it wins over the fit (default with
-    /// `--noise fixed`: 0.15).
-    #[arg(long)]
-    pub sigma_range: Option<f64>,
-    /// Bearing noise for range-bearing formats (rad); given, it wins over the fit (default with
-    /// `--noise fixed`: 0.01).
-    #[arg(long)]
-    pub sigma_bearing: Option<f64>,
-    /// Range-bearing formats (mrclam): `auto` fits the noise from the recording itself (as
-    /// `qrm pqrm calibrate`), `fixed` uses --sigma-range/--sigma-bearing. Default: auto for
-    /// mrclam unless a sigma is given.
-    #[arg(long)]
-    pub noise: Option<String>,
+    /// Range-bearing noise (MRCLAM).
+    #[command(flatten)]
+    pub noise: NoiseArgs,
     /// Drop gross outliers frame by frame (a detection whose distances to the frame's other
     /// landmarks disagree with those pairs' medians by more than 3σ of the fitted noise); the
     /// count goes into summary.json.

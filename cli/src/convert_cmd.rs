@@ -18,16 +18,10 @@ pub struct ConvertArgs {
     /// Ground truth `landmark,x,y` CSV (MRCLAM brings its own); written into the log.
     #[arg(long)]
     pub truth: Option<PathBuf>,
-    /// Range noise for range-bearing formats (m); given, it wins over the fit.
-    #[arg(long)]
-    pub sigma_range: Option<f64>,
-    /// Bearing noise for range-bearing formats (rad); given, it wins over the fit.
-    #[arg(long)]
-    pub sigma_bearing: Option<f64>,
-    /// Range-bearing formats: `auto` (default for mrclam unless a sigma is given) fits the
-    /// noise from the recording, as `qrm map` does, so the log maps as the recording does.
-    #[arg(long)]
-    pub noise: Option<String>,
+    /// Range-bearing noise (MRCLAM), resolved as `qrm map` does, so the log maps as the
+    /// recording does.
+    #[command(flatten)]
+    pub noise: crate::args::NoiseArgs,
     /// The MCAP file to write.
     #[arg(long)]
     pub out: PathBuf,
@@ -38,13 +32,7 @@ pub fn run(a: ConvertArgs) -> Result<()> {
     if a.from == "mcap" {
         bail!("--from mcap: the input is MCAP already");
     }
-    let (noise, _) = crate::pqrm_cmd::resolve_noise(
-        &a.from,
-        &a.input,
-        a.noise.as_deref(),
-        a.sigma_range,
-        a.sigma_bearing,
-    )?;
+    let (noise, _) = crate::pqrm_cmd::resolve_noise(&a.from, &a.input, &a.noise)?;
     let mut data = crate::pqrm_cmd::load_dataset(&a.from, &a.input, noise)?;
     if let Some(t) = &a.truth {
         data.truth = Some(read_truth_csv(t)?);

@@ -91,10 +91,10 @@ pub(crate) fn load_dataset(
 pub(crate) fn resolve_noise(
     format: &str,
     input: &Path,
-    mode: Option<&str>,
-    sigma_range: Option<f64>,
-    sigma_bearing: Option<f64>,
+    args: &crate::args::NoiseArgs,
 ) -> Result<(RangeBearingNoise, Option<pqrm::calibrate::NoiseFit>)> {
+    let (mode, sigma_range, sigma_bearing) =
+        (args.mode.as_deref(), args.sigma_range, args.sigma_bearing);
     let fixed = RangeBearingNoise {
         sigma_range: sigma_range.unwrap_or(RangeBearingNoise::MRCLAM.sigma_range),
         sigma_bearing: sigma_bearing.unwrap_or(RangeBearingNoise::MRCLAM.sigma_bearing),
@@ -167,13 +167,7 @@ pub fn map(a: MapArgs) -> Result<()> {
     let (noise, noise_fit) = if a.format == "mcap" {
         (RangeBearingNoise::MRCLAM, None)
     } else {
-        resolve_noise(
-            &a.format,
-            &a.input,
-            a.noise.as_deref(),
-            a.sigma_range,
-            a.sigma_bearing,
-        )?
+        resolve_noise(&a.format, &a.input, &a.noise)?
     };
     // The loaders' errors name the file and line (or topic, message and field) themselves.
     let mut log_read = None;
@@ -946,14 +940,8 @@ fn real(a: RealArgs) -> Result<()> {
         .input
         .clone()
         .unwrap_or_else(|| PathBuf::from("../shared/data/mrclam-dataset7"));
-    let (noise, noise_fit) = resolve_noise(
-        "mrclam",
-        &input,
-        a.noise.as_deref(),
-        a.sigma_range,
-        a.sigma_bearing,
-    )
-    .context("loading the recording (choose it with --input DIR)")?;
+    let (noise, noise_fit) = resolve_noise("mrclam", &input, &a.noise)
+        .context("loading the recording (choose it with --input DIR)")?;
     let mut data = load_dataset("mrclam", &input, noise)?;
     let gated = if a.gate {
         let fit = match &noise_fit {
@@ -1082,6 +1070,15 @@ fn real(a: RealArgs) -> Result<()> {
     Ok(())
 }
 
+/// Appends a section to the study's `report.md` (written whole again, atomically).
+fn append_report(out: &Path, section: &str) -> Result<()> {
+    let report = out.join("report.md");
+    let mut text = std::fs::read_to_string(&report)
+        .with_context(|| format!("reading {}", report.display()))?;
+    text.push_str(section);
+    write_atomic(&report, text.as_bytes())
+}
+
 /// `sensor_models.csv` and the "Sensor models and tempering" section appended to `report.md`.
 fn write_sweep(out: &Path, sweep: &[pqrm::study::SensorVariant]) -> Result<()> {
     let mut csv = String::from(
@@ -1126,12 +1123,7 @@ fn write_sweep(out: &Path, sweep: &[pqrm::study::SensorVariant]) -> Result<()> {
         )?;
     }
     write_atomic(&out.join("sensor_models.csv"), csv.as_bytes())?;
-    let report = out.join("report.md");
-    let mut text = std::fs::read_to_string(&report)
-        .with_context(|| format!("reading {}", report.display()))?;
-    text.push_str(&md);
-    write_atomic(&report, text.as_bytes())?;
-    Ok(())
+    append_report(out, &md)
 }
 
 /// `robots.csv`, `robots.json` and the "Many robots" section appended to `report.md`.
@@ -1206,12 +1198,7 @@ fn write_robots(out: &Path, robots: &[pqrm::robots::RobotComparison]) -> Result<
         )?;
     }
     write_atomic(&out.join("robots.csv"), csv.as_bytes())?;
-    let report = out.join("report.md");
-    let mut text = std::fs::read_to_string(&report)
-        .with_context(|| format!("reading {}", report.display()))?;
-    text.push_str(&md);
-    write_atomic(&report, text.as_bytes())?;
-    Ok(())
+    append_report(out, &md)
 }
 
 #[allow(clippy::too_many_arguments)]
