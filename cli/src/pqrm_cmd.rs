@@ -362,8 +362,15 @@ fn calibrate(a: CalibrateArgs) -> Result<()> {
         "format": a.format,
         "fit": fit,
         "method": "spread of the distance between landmarks seen in one frame about its median over frames; IRLS on |z| <= 3; outlier rate = share beyond 3 sigma minus 0.27 %",
-        "use": format!("qrm map --format {} --input {} --noise auto  (or --sigma-range {:.4} --sigma-bearing {:.5} --sensor outliers:{:.3},{:.0})",
-            a.format, a.input.display(), fit.sigma_range, fit.sigma_bearing, fit.outlier_rate, fit.max_range.ceil()),
+        // Only a range-bearing format takes the fitted σs; the others carry their own
+        // covariances, which this fit is a check of.
+        "use": if a.format == "mrclam" {
+            format!("qrm map --format mrclam --input {} --noise auto  (or --sigma-range {:.4} --sigma-bearing {:.5}; heavy tails: --sensor outliers:{:.3},{:.0})",
+                a.input.display(), fit.sigma_range, fit.sigma_bearing, fit.outlier_rate, fit.max_range.ceil())
+        } else {
+            format!("{} files carry their own covariances: compare them with this fit; for heavy tails: qrm map --sensor outliers:{:.3},{:.0}",
+                a.format, fit.outlier_rate, fit.max_range.ceil())
+        },
     });
     write_atomic(
         &out_dir.join("calibration.json"),
