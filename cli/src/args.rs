@@ -133,9 +133,11 @@ pub struct RealArgs {
     /// (the report also compares a fixed set of models and tempering exponents).
     #[arg(long, default_value = "gaussian")]
     pub sensor: String,
-    /// Tempering exponent of the main run, in (0, 1].
-    #[arg(long, default_value_t = 1.0)]
-    pub temper: f64,
+    /// Tempering exponent of the main run: a number in (0, 1] (1 = the thesis's eq. 2.10) or
+    /// `auto`, one per calculus chosen from the recording (held-out frames, no ground truth;
+    /// see `pqrm::temper`). The report compares τ = 1 with the chosen τ either way.
+    #[arg(long, default_value = "1")]
+    pub temper: String,
     /// Seed.
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
@@ -216,10 +218,12 @@ pub struct MapArgs {
     /// of the sensor, e.g. outliers:0.05,30).
     #[arg(long, default_value = "gaussian")]
     pub sensor: String,
-    /// Tempering exponent in (0, 1]: each frame's evidence counts τ times (frames of a robot
-    /// standing still are not independent).
-    #[arg(long, default_value_t = 1.0)]
-    pub temper: f64,
+    /// Tempering exponent: a number in (0, 1] — each frame's evidence counts τ times (frames
+    /// of a robot standing still are not independent; 1 = the thesis's eq. 2.10) — or `auto`,
+    /// chosen from the recording by how well the map predicts held-out frames (no ground
+    /// truth needed; the choice goes into summary.json).
+    #[arg(long, default_value = "1")]
+    pub temper: String,
     /// Map only these robots' scans (comma-separated robot numbers, e.g. `1,2`).
     #[arg(long, value_delimiter = ',')]
     pub robots: Vec<u32>,

@@ -421,6 +421,15 @@ fn the_real_data_study_runs_on_a_subset() {
         "six variants × six calculi"
     );
     assert!(sweep.contains("\nstudent-t:4,0.3,edc,"), "{sweep}");
+    let temper = std::fs::read_to_string(out.join("temper.csv")).unwrap();
+    assert_eq!(temper.lines().count(), 1 + 6 * 15, "six calculi × 15 τ");
+    assert_eq!(
+        temper.lines().filter(|l| l.ends_with(",true")).count(),
+        6,
+        "one chosen τ per calculus"
+    );
+    assert!(report.contains("## Tempering chosen from the data"));
+    assert!(out.join("temper_fit.svg").exists());
     let robots = std::fs::read_to_string(out.join("robots.csv")).unwrap();
     assert!(
         robots.lines().any(|l| l.starts_with("edc,merged,")),
@@ -663,4 +672,128 @@ fn gating_drops_a_few_detections_and_says_how_many() {
     );
     assert!(g > 0 && (g as f64) < 0.05 * of as f64, "{g} of {of}");
     std::fs::remove_dir_all(&out).ok();
+}
+
+/// `n` distinct frames of six almost collinear landmarks (a deterministic jitter of ~0.3 m), each written
+/// `repeat` times in a row: a robot that stands still.
+fn repeated_frames_csv(path: &Path, n: usize, repeat: usize) {
+    // nearly on a line, so that left-right is in doubt frame by frame
+    let lm = [
+        (1, 0.0, 0.0),
+        (2, 1.0, 0.1),
+        (3, 2.0, -0.15),
+        (4, 3.0, 0.05),
+        (5, 4.0, -0.1),
+        (6, 5.0, 0.2),
+    ];
+    let mut csv = String::from("t,robot,landmark,x,y,cxx,cxy,cyy\n");
+    let mut t = 0;
+    for f in 0..n {
+        for _ in 0..repeat {
+            for (k, (id, x, y)) in lm.iter().enumerate() {
+                let u = (f * 7 + k) as f64;
+                let (dx, dy) = (0.3 * (u * 12.9898).sin(), 0.3 * (u * 78.233).cos());
+                csv.push_str(&format!("{t},0,{id},{},{},0.09,0,0.09\n", x + dx, y + dy));
+            }
+            t += 1;
+        }
+    }
+    std::fs::write(path, csv).unwrap();
+}
+
+#[test]
+fn map_chooses_tau_from_the_data_and_sees_through_repeated_frames() {
+    let dir = tmp("temper");
+    let chosen = |repeat: usize| {
+        let input = dir.join(format!("x{repeat}.csv"));
+        repeated_frames_csv(&input, 30, repeat);
+        let out = dir.join(format!("out{repeat}"));
+        let o = qrm(
+            &[
+                "map",
+                "--format",
+                "csv",
+                "--input",
+                input.to_str().unwrap(),
+                "--calculus",
+                "left-right",
+                "--samples",
+                "200",
+                "--temper",
+                "auto",
+                "--out",
+                out.to_str().unwrap(),
+            ],
+            "",
+        );
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        assert!(
+            String::from_utf8_lossy(&o.stderr).contains("chosen from held-out frames"),
+            "{}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+        let s: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap())
+                .unwrap();
+        let tau = s["temper_fit"]["chosen"].as_f64().unwrap();
+        assert_eq!(
+            s["temper"].as_f64().unwrap(),
+            tau,
+            "the map is made with the chosen τ"
+        );
+        let map: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(out.join("map.json")).unwrap()).unwrap();
+        assert_eq!(
+            map["config"]["temper"].as_f64(),
+            Some(tau),
+            "map.json says how it was made"
+        );
+        tau
+    };
+    let (once, five) = (chosen(1), chosen(5));
+    assert!(
+        five * 2.8 <= once,
+        "τ {five} for each frame five times vs {once} for each once"
+    );
+    // Too few frames to hold any out: a typed error, nothing written.
+    let input = dir.join("short.csv");
+    repeated_frames_csv(&input, 3, 1);
+    let out = dir.join("short-out");
+    let o = qrm(
+        &[
+            "map",
+            "--format",
+            "csv",
+            "--input",
+            input.to_str().unwrap(),
+            "--temper",
+            "auto",
+            "--out",
+            out.to_str().unwrap(),
+        ],
+        "",
+    );
+    assert!(!o.status.success());
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("--temper auto") && err.contains("at least 5 frames"),
+        "{err}"
+    );
+    assert!(!out.exists());
+    let o = qrm(
+        &[
+            "map",
+            "--format",
+            "csv",
+            "--input",
+            input.to_str().unwrap(),
+            "--temper",
+            "1.5",
+            "--out",
+            out.to_str().unwrap(),
+        ],
+        "",
+    );
+    assert!(String::from_utf8_lossy(&o.stderr).contains("temper must be in (0, 1]"));
+    std::fs::remove_dir_all(&dir).ok();
 }

@@ -20,6 +20,9 @@
 //! - **A pseudo-count floor** ([`likelihood`]): one outlier cannot rule a state out forever.
 //! - **Finest calculus once, merge the rest**: [`likelihood::merge_counts`] turns EDC counts
 //!   into counts of any coarser calculus, so a study samples once for six calculi.
+//! - **Tempering chosen from the data** ([`temper`]): eq. 2.10 counts correlated frames as
+//!   independent evidence; a tempering exponent τ, chosen by how well the map predicts
+//!   held-out blocks of frames, makes the map's confidence honest without ground truth.
 //! - **Determinism**: every landmark's samples are seeded by `(seed, step, id)`; results do not
 //!   depend on the thread count.
 //!
@@ -50,6 +53,7 @@ pub mod robots;
 pub mod sampler;
 pub mod sensor;
 pub mod study;
+pub mod temper;
 
 pub use error::{PqrmError, Result};
 pub use likelihood::{LandmarkSet, Orderings};

@@ -104,16 +104,21 @@ fn error_on(map: &Pqrm, truth: &GroundTruth, sets: &BTreeSet<LandmarkSet>) -> Re
     Ok(if n == 0 { 0.0 } else { wrong as f64 / n as f64 })
 }
 
-/// Compares each robot alone, all robots pooled and the robots' maps merged, per calculus.
+/// Compares each robot alone, all robots pooled and the robots' maps merged, per calculus;
+/// each calculus's maps are tempered by its exponent in `tempers` (one per calculus, in
+/// order; `config.temper` is ignored).
 ///
 /// # Errors
-/// [`PqrmError::Mismatch`] without ground truth or with fewer than two robots; mapper errors.
+/// [`PqrmError::Mismatch`] without ground truth or with fewer than two robots;
+/// [`PqrmError::InvalidConfig`] for a wrong count of exponents; mapper errors.
 pub fn compare_robots(
     dataset: &Dataset,
     calculi: &[Calculus],
     config: PqrmConfig,
+    tempers: &[f64],
     progress: &(dyn Fn() + Sync),
 ) -> Result<Vec<RobotComparison>> {
+    crate::temper::check_count(tempers, calculi.len())?;
     let truth = dataset
         .truth
         .as_ref()
@@ -129,7 +134,8 @@ pub fn compare_robots(
         )));
     }
     let mut out = Vec::with_capacity(calculi.len());
-    for calc in calculi {
+    for (calc, &temper) in calculi.iter().zip(tempers) {
+        let config = PqrmConfig { temper, ..config };
         let singles = scans_of
             .keys()
             .map(|r| map_scans(dataset, calc, config, Some(*r), progress))
@@ -229,7 +235,7 @@ mod tests {
             samples: 4000,
             ..PqrmConfig::default()
         };
-        let r = compare_robots(&data, &[calc], config, &|| ()).unwrap();
+        let r = compare_robots(&data, &[calc], config, &[1.0], &|| ()).unwrap();
         let r = &r[0];
         assert_eq!(r.robots.len(), 3);
         assert_eq!(r.merged.n_sets, r.pooled.n_sets);

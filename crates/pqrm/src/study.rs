@@ -625,6 +625,31 @@ pub fn run_real(
     config: PqrmConfig,
     progress: &(dyn Fn() + Sync),
 ) -> Result<Vec<RealCalculusResult>> {
+    run_real_tempered(
+        dataset,
+        calculi,
+        config,
+        &vec![config.temper; calculi.len()],
+        progress,
+    )
+}
+
+/// As [`run_real`], each calculus's map tempered by its own exponent (`tempers`, one per
+/// calculus in order, e.g. chosen by [`crate::temper::fit_temper`]); `config.temper` is
+/// ignored. Tempering changes no maximum-likelihood state, so only the confidence scores
+/// (entropy, P(ML), calibration) depend on it.
+///
+/// # Errors
+/// As [`run_real`]; [`PqrmError::InvalidConfig`] for a wrong count or an exponent outside
+/// (0, 1].
+pub fn run_real_tempered(
+    dataset: &Dataset,
+    calculi: &[String],
+    config: PqrmConfig,
+    tempers: &[f64],
+    progress: &(dyn Fn() + Sync),
+) -> Result<Vec<RealCalculusResult>> {
+    crate::temper::check_count(tempers, calculi.len())?;
     let truth = dataset
         .truth
         .as_ref()
@@ -633,7 +658,8 @@ pub fn run_real(
     let mut maps = family
         .calculi
         .iter()
-        .map(|c| Pqrm::new(c.clone(), config))
+        .zip(tempers)
+        .map(|(c, &temper)| Pqrm::new(c.clone(), PqrmConfig { temper, ..config }))
         .collect::<Result<Vec<_>>>()?;
     let n = family.calculi.len();
     // Per calculus and triplet: how many frames voted for each state, and the summed
