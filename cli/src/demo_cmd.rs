@@ -348,7 +348,7 @@ fn write_log(
     )?;
     crate::sim_cmd::write_world(&mut log, sc)?;
     for f in frames {
-        crate::sim_cmd::write_frame(&mut log, sc, f)?;
+        crate::sim_cmd::write_frame(&mut log, f)?;
     }
     // the map's beliefs at the end of the mapping drive
     let elements: Vec<Value> = map

@@ -157,7 +157,7 @@ fn write_log(
     )?;
     write_world(&mut log, sc)?;
     for f in frames {
-        write_frame(&mut log, sc, f)?;
+        write_frame(&mut log, f)?;
     }
     let t_end = frames.last().map_or(0.0, |f| f.t);
     log.write("/log", t_end, &json!({"timestamp": stamp(t_end), "level": 2, "message": format!("{} frames", frames.len()), "name": "qrm sim", "file": "", "line": 0}))?;
@@ -207,7 +207,7 @@ pub fn write_world(log: &mut McapLog, sc: &sim2d::Scenario) -> Result<()> {
 }
 
 /// One frame: the pose on `/tf`, the detections, the scan.
-pub fn write_frame(log: &mut McapLog, sc: &sim2d::Scenario, f: &sim2d::Frame) -> Result<()> {
+pub fn write_frame(log: &mut McapLog, f: &sim2d::Frame) -> Result<()> {
     {
         log.write(
             "/tf",
@@ -222,19 +222,18 @@ pub fn write_frame(log: &mut McapLog, sc: &sim2d::Scenario, f: &sim2d::Frame) ->
             &json!({"timestamp": stamp(f.t), "t": f.t, "frame_id": "base_link", "detections": dets}),
         )?;
         if let Some(scan) = &f.scan {
-            // JSON has no infinity: no return is reported as max range + 1, beyond the
-            // channel's `range_max`. Ranges are rounded to f32, what ROS carries and a lidar
-            // resolves, so a ROS 2 bag of the same run holds the same numbers.
-            let ranges: Vec<f64> = scan
+            // No return is `null`. JSON has no infinity, and Foxglove draws a
+            // `foxglove.LaserScan` with no range limits (it takes range_min/range_max as
+            // ±∞), so any number past the sensor's range — the old max range + 1 — drew a
+            // ring of phantom points around the robot. Foxglove reads `null` into its
+            // Float32Array as 0: a zero-length beam at the sensor, no point anywhere else.
+            // qrm's reader (and REP 117) read it as no return. Ranges are rounded to f32,
+            // what ROS carries and a lidar resolves, so a ROS 2 bag of the same run holds
+            // the same numbers.
+            let ranges: Vec<Option<f64>> = scan
                 .ranges
                 .iter()
-                .map(|r| {
-                    if r.is_finite() {
-                        f64::from(*r as f32)
-                    } else {
-                        sc.lidar.max_range + 1.0
-                    }
-                })
+                .map(|r| r.is_finite().then(|| f64::from(*r as f32)))
                 .collect();
             log.write(
                 "/scan",

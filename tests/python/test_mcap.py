@@ -31,6 +31,32 @@ def test_sim_logs_read_back_with_the_mcap_package(qrm_bin, tmp_path, scenario):
     assert counts["/world"] == 1
 
 
+@pytest.mark.parametrize("scenario", ["hallway", "field"])
+def test_foxglove_draws_no_phantom_ring_for_beams_without_return(qrm_bin, tmp_path, scenario):
+    """Foxglove draws a `foxglove.LaserScan` with range_min = -inf, range_max = +inf (no
+    limits: `normalizeFoxgloveLaserScan` in its 3D panel) after `new Float32Array(ranges)`,
+    so every number is drawn where it says; a beam without return must not be a number past
+    the sensor's range (the old max range + 1 drew a ring at 31 m). Checked on every message:
+    after Foxglove's own conversion, every drawn point lies within the channel's range_max,
+    and beams without return (null → 0) sit at the sensor."""
+    import numpy as np
+
+    subprocess.run([qrm_bin, "sim", "--scenario", scenario, "--seed", "4", "--out", str(tmp_path)], check=True, capture_output=True)
+    no_return = hits = 0
+    with open(tmp_path / "run.mcap", "rb") as f:
+        for schema, channel, message in make_reader(f).iter_messages(topics=["/scan"]):
+            assert schema.name == "foxglove.LaserScan"
+            range_max = float(channel.metadata["range_max"])
+            raw = json.loads(message.data)["ranges"]
+            # JavaScript's Number(null) is 0; Float32Array rounds like float32
+            drawn = np.asarray([0.0 if r is None else r for r in raw], dtype=np.float32)
+            assert np.all(np.isfinite(drawn))
+            assert drawn.max() <= range_max, f"a point drawn at {drawn.max()} m > {range_max} m"
+            no_return += sum(r is None for r in raw)
+            hits += int(np.count_nonzero(drawn > 0))
+    assert no_return > 0 and hits > 0, (no_return, hits)
+
+
 def test_a_log_cut_midway_stays_readable_up_to_its_last_chunk(qrm_bin, tmp_path):
     """A run killed while writing leaves complete chunks readable (chunks are ≤ 256 KiB)."""
     from mcap.stream_reader import StreamReader

@@ -35,7 +35,10 @@ def _ros2_bag_from(log: pathlib.Path, bag_dir: pathlib.Path, topic: str = "/scan
             for _schema, channel, message in make_reader(f).iter_messages(topics=["/scan"]):
                 m = json.loads(message.data)
                 range_max = float(channel.metadata["range_max"])
-                ranges = np.asarray(m["ranges"], dtype=np.float32)
+                # qrm writes no return as null; REP 117 says +inf
+                ranges = np.asarray(
+                    [np.inf if r is None else r for r in m["ranges"]], dtype=np.float32
+                )
                 ranges[ranges > range_max] = np.inf
                 n = len(ranges)
                 start, end = m["start_angle"], m["end_angle"]
