@@ -3,7 +3,7 @@
 
 use std::collections::BTreeMap;
 
-use numpy::{IntoPyArray, PyArray1, PyReadonlyArray2};
+use numpy::{IntoPyArray, PyArray1};
 use pyo3::prelude::*;
 use qsr_core::StateId;
 use qsr_core::binary::{BinaryNetwork, close_binary};
@@ -51,13 +51,14 @@ impl BinaryCalculus {
     fn classify<'py>(
         &self,
         py: Python<'py>,
-        points: PyReadonlyArray2<'py, f64>,
+        points: Bound<'py, PyAny>,
     ) -> PyResult<Bound<'py, PyArray1<i64>>> {
+        let points = crate::arrays::floats2(&points, "points")?;
         let a = points.as_array();
         let k = self.inner.input_len();
         if a.ncols() != k {
             return Err(invalid(format!(
-                "{} classifies rows of {k} numbers, the array has {} columns",
+                "points: {} classifies rows of {k} numbers, the array has {} columns",
                 self.inner.name(),
                 a.ncols()
             )));

@@ -2,7 +2,7 @@
 
 use std::collections::BTreeMap;
 
-use numpy::{IntoPyArray, PyArray1, PyArrayMethods, PyReadonlyArray2, PyUntypedArrayMethods};
+use numpy::{IntoPyArray, PyArray1, PyArrayMethods, PyReadonlyArray2};
 use pyo3::prelude::*;
 use qsr_core::{ComposeOptions, Permutation, StateId};
 
@@ -33,14 +33,17 @@ impl Calculus {
         let k = self.inner.frame().input_len();
         if view.ncols() != k {
             return Err(invalid(format!(
-                "calculus `{}` takes rows of {k} numbers, got an array of shape {:?}",
+                "points: calculus `{}` takes rows of {k} numbers, got an array of shape {:?}",
                 self.inner.name(),
                 view.shape()
             )));
         }
         let calc = &self.inner;
-        let result: Result<Vec<i64>, qsr_core::QsrError> = match (k, points.as_slice()) {
-            (6, Ok(flat)) => {
+        // `view.as_slice()` is `Some` only for C order: the numpy crate's `as_slice` also
+        // hands out a Fortran-ordered array's memory, whose rows are not contiguous
+        // (regression: a Fortran-ordered array was classified column-wise).
+        let result: Result<Vec<i64>, qsr_core::QsrError> = match (k, view.as_slice()) {
+            (6, Some(flat)) => {
                 let (rows, _) = flat.as_chunks::<6>();
                 crate::pool::detach(py, || {
                     let mut out = vec![StateId(0); rows.len()];
@@ -179,17 +182,29 @@ impl Calculus {
     fn classify<'py>(
         &self,
         py: Python<'py>,
-        points: PyReadonlyArray2<'py, f64>,
-        out: Option<Bound<'py, PyArray1<i64>>>,
+        points: Bound<'py, PyAny>,
+        out: Option<Bound<'py, PyAny>>,
     ) -> PyResult<Bound<'py, PyArray1<i64>>> {
+        let points = crate::arrays::floats2(&points, "points")?;
         let n = points.as_array().nrows();
+        let out = out.map(|o| crate::arrays::out_ids(o, n)).transpose()?;
         let k = self.inner.frame().input_len();
-        let (Ok(flat), 6) = (points.as_slice(), k) else {
+        let view = points.as_array();
+        // checked before the fast path, which reads the memory in rows of six (regression:
+        // an (n, 5) array was read as rows of six numbers)
+        if view.ncols() != k {
+            return Err(invalid(format!(
+                "points: calculus `{}` takes rows of {k} numbers, got an array of shape {:?}",
+                self.inner.name(),
+                view.shape()
+            )));
+        }
+        let (Some(flat), 6) = (view.as_slice(), k) else {
             let ids = self.classify_ids(py, &points)?;
             return match out {
                 None => Ok(ids.into_pyarray(py)),
                 Some(o) => {
-                    o.readwrite()
+                    o.try_readwrite()?
                         .as_slice_mut()
                         .map_err(|e| invalid(e.to_string()))?
                         .copy_from_slice(&ids);
@@ -198,12 +213,11 @@ impl Calculus {
             };
         };
         let target = match out {
-            Some(o) if o.len() == n => o,
-            Some(o) => return Err(invalid(format!("out has length {}, expected {n}", o.len()))),
+            Some(o) => o,
             None => PyArray1::<i64>::zeros(py, n, false),
         };
         {
-            let mut rw = target.readwrite();
+            let mut rw = target.try_readwrite()?;
             let dst = rw
                 .as_slice_mut()
                 .map_err(|e| invalid(format!("out must be contiguous: {e}")))?;
@@ -218,9 +232,9 @@ impl Calculus {
     fn classify_labels<'py>(
         &self,
         py: Python<'py>,
-        points: PyReadonlyArray2<'py, f64>,
+        points: Bound<'py, PyAny>,
     ) -> PyResult<Vec<String>> {
-        let ids = self.classify_ids(py, &points)?;
+        let ids = self.classify_ids(py, &crate::arrays::floats2(&points, "points")?)?;
         Ok(ids
             .iter()
             .map(|i| self.inner.labels()[*i as usize].clone())

@@ -10,6 +10,7 @@
 //! call becomes a Python `PanicException` (pyo3 catches it at the boundary), never a crash.
 #![allow(unsafe_code)] // pyo3's #[pymodule]/#[pyclass]/#[pymethods] expand to unsafe FFI glue; this crate writes none itself.
 
+mod arrays;
 mod binary;
 mod calculus;
 mod errors;

@@ -112,12 +112,18 @@ impl Pqrm {
         &mut self,
         py: Python<'py>,
         t: f64,
-        ids: PyReadonlyArray1<'py, i64>,
-        xy: PyReadonlyArray2<'py, f64>,
-        cov: PyReadonlyArray2<'py, f64>,
+        ids: Bound<'py, PyAny>,
+        xy: Bound<'py, PyAny>,
+        cov: Bound<'py, PyAny>,
         robot: u32,
     ) -> PyResult<Bound<'py, PyDict>> {
-        let scan = scan_from_arrays(t, robot, &ids, &xy, &cov)?;
+        let scan = scan_from_arrays(
+            t,
+            robot,
+            &crate::arrays::ints1(&ids, "ids")?,
+            &crate::arrays::floats2(&xy, "xy")?,
+            &crate::arrays::floats2(&cov, "cov")?,
+        )?;
         let map = &mut self.inner;
         let report = crate::pool::detach(py, || map.update(&scan)).map_err(perr)?;
         let d = PyDict::new(py);
@@ -366,12 +372,16 @@ pub(crate) fn read_observations<'py>(
 pub(crate) fn single_observation<'py>(
     py: Python<'py>,
     calculus: &Calculus,
-    points: PyReadonlyArray2<'py, f64>,
-    cov: PyReadonlyArray2<'py, f64>,
+    points: Bound<'py, PyAny>,
+    cov: Bound<'py, PyAny>,
     samples: usize,
     floor: f64,
     seed: u64,
 ) -> PyResult<Bound<'py, PyArray1<f64>>> {
+    let (points, cov) = (
+        crate::arrays::floats2(&points, "points")?,
+        crate::arrays::floats2(&cov, "cov")?,
+    );
     let (p, c) = (points.as_array(), cov.as_array());
     if p.shape() != [3, 2] || c.shape() != [3, 3] {
         return Err(invalid(format!(

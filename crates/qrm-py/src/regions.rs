@@ -1,7 +1,7 @@
 //! `qrm.SalientRegionMap`, `qrm._qrm.serge_run` and the SERGE study: thin wrappers of the
 //! `serge` crate.
 
-use numpy::{IntoPyArray, PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray2};
+use numpy::{IntoPyArray, PyArray1, PyArray2, PyArrayMethods};
 use pyo3::prelude::*;
 use serge::{BeliefSet, CellMasses, Grid, Serge, SergeError, SergeParams};
 
@@ -90,8 +90,9 @@ impl SalientRegionMap {
     fn region_of<'py>(
         &self,
         py: Python<'py>,
-        points: PyReadonlyArray2<'py, f64>,
+        points: Bound<'py, PyAny>,
     ) -> PyResult<Bound<'py, PyArray1<i64>>> {
+        let points = crate::arrays::floats2(&points, "points")?;
         let view = points.as_array();
         if view.ncols() != 2 {
             return Err(invalid(format!(
