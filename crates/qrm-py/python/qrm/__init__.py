@@ -36,7 +36,7 @@ from ._qrm import (
     single_observation,
     worker_threads,
 )
-from . import _qrm, reason, sim
+from . import _qrm, reason, sim, types
 
 __all__ = [
     "BinaryCalculus",
@@ -66,6 +66,7 @@ __all__ = [
     "serge_cross_validate",
     "sim",
     "single_observation",
+    "types",
     "worker_threads",
 ]
 

@@ -7,14 +7,15 @@
 """
 from __future__ import annotations
 
-from typing import Dict, List
+from typing import List
 
 from . import _qrm
+from .types import Frame
 
 SCENARIOS = ("pqrm-100", "qlink-200", "hallway", "field")
 
 
-def run(scenario: str, seed: int, *, lidar: bool = False) -> List[Dict[str, object]]:
+def run(scenario: str, seed: int, *, lidar: bool = False) -> List[Frame]:
     """Runs a scenario; each frame is {"t", "pose", "ids", "xy", "cov"} (+ "angles", "ranges"
     with `lidar=True`), positions in the robot frame, ready for `Pqrm.update`."""
     return _qrm.simulate(scenario, seed, lidar=lidar)
