@@ -113,6 +113,17 @@ impl BinaryCalculus {
         qsr_core::binary::render_binary_svg(&self.inner, width)
     }
 
+    /// The partition drawn in a notebook.
+    fn _repr_svg_(&self) -> String {
+        self.render_svg(400)
+    }
+
+    /// Pickles as its name (every binary calculus is a built-in family member).
+    fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<(Bound<'py, PyAny>, (String,))> {
+        let ctor = slf.get_type().getattr("builtin")?;
+        Ok((ctor, (slf.get().inner.name().to_owned(),)))
+    }
+
     fn __repr__(&self) -> String {
         format!(
             "BinaryCalculus('{}', {} relations)",

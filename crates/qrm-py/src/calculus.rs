@@ -327,6 +327,17 @@ impl Calculus {
         .map_err(qsr)
     }
 
+    /// The partition drawn in a notebook.
+    fn _repr_svg_(&self) -> PyResult<String> {
+        self.render_svg(400)
+    }
+
+    /// Pickles as its spec (multiprocessing, Ray): `Calculus.from_spec_text(spec_toml)`.
+    fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<(Bound<'py, PyAny>, (String,))> {
+        let ctor = slf.get_type().getattr("from_spec_text")?;
+        Ok((ctor, (slf.get().spec_toml()?,)))
+    }
+
     fn __repr__(&self) -> String {
         format!(
             "Calculus({:?}, {} states, {})",

@@ -16,6 +16,7 @@ mod calculus;
 mod errors;
 mod mapping;
 mod navigation;
+mod picture;
 mod pool;
 mod reasoning;
 mod regions;

@@ -254,6 +254,82 @@ impl Pqrm {
         self.inner.to_json().map_err(perr)
     }
 
+    /// A map from its JSON text (`to_json`).
+    #[staticmethod]
+    fn from_json(text: &str) -> PyResult<Self> {
+        pqrm::Pqrm::from_json(text)
+            .map(|inner| Self { inner })
+            .map_err(perr)
+    }
+
+    /// Pickles as its JSON (multiprocessing, Ray): `Pqrm.from_json(to_json())`.
+    fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<(Bound<'py, PyAny>, (String,))> {
+        let ctor = slf.get_type().getattr("from_json")?;
+        Ok((ctor, (slf.borrow().to_json()?,)))
+    }
+
+    /// Every recorded set as columns: {"a", "b", "c", "ml_state", "p_ml", "entropy",
+    /// "updates"} (NumPy arrays; `qrm.to_pandas(map)` makes a DataFrame of it).
+    fn columns<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let n = self.inner.len();
+        let (mut a, mut b, mut c) = (
+            Vec::with_capacity(n),
+            Vec::with_capacity(n),
+            Vec::with_capacity(n),
+        );
+        let (mut ml, mut p, mut h, mut u) = (
+            Vec::with_capacity(n),
+            Vec::with_capacity(n),
+            Vec::with_capacity(n),
+            Vec::with_capacity(n),
+        );
+        for (set, belief) in self.inner.iter() {
+            let [x, y, z] = set.ids();
+            a.push(i64::from(x));
+            b.push(i64::from(y));
+            c.push(i64::from(z));
+            let s = belief.ml_state();
+            ml.push(i64::from(s.0));
+            p.push(belief.log_p[s.index()].exp());
+            h.push(belief.entropy());
+            u.push(i64::from(belief.updates));
+        }
+        let d = PyDict::new(py);
+        d.set_item("a", a.into_pyarray(py))?;
+        d.set_item("b", b.into_pyarray(py))?;
+        d.set_item("c", c.into_pyarray(py))?;
+        d.set_item("ml_state", ml.into_pyarray(py))?;
+        d.set_item("p_ml", p.into_pyarray(py))?;
+        d.set_item("entropy", h.into_pyarray(py))?;
+        d.set_item("updates", u.into_pyarray(py))?;
+        Ok(d)
+    }
+
+    /// The sets as a pandas DataFrame (`columns()`); pandas is optional.
+    fn to_pandas<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        let pd = py.import("pandas").map_err(|e| {
+            pyo3::exceptions::PyImportError::new_err(format!(
+                "Pqrm.to_pandas needs pandas (pip install pandas): {e}"
+            ))
+        })?;
+        pd.call_method1("DataFrame", (self.columns(py)?,))
+    }
+
+    /// The map in a notebook: the histogram of P(ML) over its sets.
+    fn _repr_svg_(&self) -> PyResult<String> {
+        let p: Vec<f64> = self
+            .inner
+            .iter()
+            .map(|(_, b)| b.log_p[b.ml_state().index()].exp())
+            .collect();
+        let title = format!(
+            "{} map: {} sets, how sure",
+            self.inner.calculus().name(),
+            self.inner.len()
+        );
+        crate::picture::p_ml_histogram(&title, &p).map_err(invalid)
+    }
+
     fn __len__(&self) -> usize {
         self.inner.len()
     }

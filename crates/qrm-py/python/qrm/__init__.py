@@ -66,6 +66,7 @@ __all__ = [
     "serge_cross_validate",
     "sim",
     "single_observation",
+    "to_pandas",
     "types",
     "worker_threads",
 ]
@@ -205,3 +206,18 @@ def qlink_study(trial: str = "all", *, quick: bool = True, pairs: Optional[int] 
     """The §4.4.1 study (Table 4.1): `{"table": [...], "records": [...]}`."""
     result: Dict[str, Any] = json.loads(_qrm.qlink_study(trial, quick, pairs, seed))
     return result
+
+
+def to_pandas(table: Union[Sequence[Mapping[str, Any]], Mapping[str, Sequence[Any]], Pqrm]) -> Any:
+    """A pandas DataFrame of a study's records (a list of dicts, one row each), of a table of
+    columns (a dict of equal-length sequences) or of a map (`Pqrm.to_pandas`: one row per
+    set). pandas is optional: without it this raises ImportError saying how to get it."""
+    try:
+        import pandas as pd  # type: ignore[import-untyped,unused-ignore]
+    except ImportError as e:
+        raise ImportError("qrm.to_pandas needs pandas (pip install pandas)") from e
+    if isinstance(table, Pqrm):
+        return table.to_pandas()
+    if isinstance(table, Mapping):
+        return pd.DataFrame(dict(table))
+    return pd.DataFrame(list(table))
