@@ -367,6 +367,25 @@ fn write_log(
         t_map,
         &json!({"timestamp": stamp(t_map), "elements": elements}),
     )?;
+    // each step of the pipeline is an event on /log, so a Foxglove user reads the story in
+    // the Log panel beside the 3D view
+    let event = |log: &mut McapLog, t: f64, level: u8, message: String| -> Result<()> {
+        Ok(log.write(
+            "/log",
+            t,
+            &json!({"timestamp": stamp(t), "level": level, "message": message, "name": "qrm demo", "file": "", "line": 0}),
+        )?)
+    };
+    event(
+        &mut log,
+        t_map,
+        2,
+        format!(
+            "mapped by lidar: {} frames, {} map elements",
+            frames.len(),
+            map.elements().len()
+        ),
+    )?;
     // navigation: poses, transitions, the trajectory and the plan's landmarks
     let t_nav = t_map + 1.0;
     let plan: Vec<Value> = outcome
@@ -375,6 +394,50 @@ fn write_log(
         .map(|t| json!({"id": t.to, "landmarks": map.elements()[t.to].landmarks, "calculus": map.calculus(t.to).name()}))
         .collect();
     log.write("/plan", t_nav, &json!({"timestamp": stamp(t_nav), "goal": goal, "cost": outcome.plan_len, "elements": plan}))?;
+    event(
+        &mut log,
+        t_nav,
+        2,
+        format!(
+            "plan to landmark {goal}: |P| = {} elements, {} re-plan(s) on the way",
+            outcome.plan_len, outcome.replans
+        ),
+    )?;
+    // the plan in 3D: each element's triangle of landmarks, in the world frame
+    let where_is: BTreeMap<u32, [f64; 2]> = sc
+        .world
+        .spec()
+        .landmarks
+        .iter()
+        .map(|l| (l.id, l.pos))
+        .collect();
+    let triangles: Vec<Value> = outcome
+        .transitions
+        .iter()
+        .filter_map(|t| {
+            let pts: Vec<[f64; 2]> = map.elements()[t.to]
+                .landmarks
+                .iter()
+                .filter_map(|id| where_is.get(id).copied())
+                .collect();
+            (pts.len() == 3).then(|| {
+                let loop_pts: Vec<Value> = pts
+                    .iter()
+                    .chain(std::iter::once(&pts[0]))
+                    .map(|p| json!({"x": p[0], "y": p[1], "z": 0.3}))
+                    .collect();
+                json!({"type": 0, "pose": {"position": {"x": 0.0, "y": 0.0, "z": 0.0}, "orientation": yaw(0.0)}, "thickness": 0.25,
+                       "scale_invariant": false, "points": loop_pts, "color": {"r": 0.0, "g": 0.45, "b": 0.7, "a": 1.0}})
+            })
+        })
+        .collect();
+    log.write(
+        "/navigation",
+        t_nav,
+        &json!({"deletions": [], "entities": [{
+            "timestamp": stamp(t_nav), "frame_id": "world", "id": "plan", "lifetime": stamp(0.0), "frame_locked": false,
+            "cylinders": [], "spheres": [], "texts": [], "lines": triangles}]}),
+    )?;
     let speed = 1.0; // m/s along the trajectory
     let mut t = t_nav;
     let mut prev = outcome.trajectory.first().copied().unwrap_or([0.0, 0.0]);
@@ -405,6 +468,18 @@ fn write_log(
                 "/controller",
                 t,
                 &json!({"timestamp": stamp(t), "from": tr.from, "to": tr.to, "link": tr.link, "commands": tr.commands, "success": tr.success, "length": tr.length}),
+            )?;
+            event(
+                &mut log,
+                t,
+                if tr.success { 2 } else { 3 },
+                format!(
+                    "transition {} → {}: {} after {:.1} m",
+                    tr.from,
+                    tr.to,
+                    if tr.success { "link found" } else { "failed" },
+                    tr.length
+                ),
             )?;
             next_transition += 1;
         }

@@ -148,14 +148,8 @@ fn world_rates(worlds: &[World], v: FieldVariant) -> (f64, f64) {
         .filter_map(|w| w.summaries.iter().find(|s| s.variant == v))
         .map(|s| s.success_rate)
         .collect();
-    let n = rates.len() as f64;
-    let mean = rates.iter().sum::<f64>() / n.max(1.0);
-    let sd = if rates.len() > 1 {
-        (rates.iter().map(|r| (r - mean).powi(2)).sum::<f64>() / (n - 1.0)).sqrt()
-    } else {
-        0.0
-    };
-    (mean, sd)
+    let s = qsr_core::stats::MeanSd::of(&rates);
+    (s.mean, s.sd)
 }
 
 fn write_outputs(

@@ -221,6 +221,24 @@ pub fn write_frame(log: &mut McapLog, f: &sim2d::Frame) -> Result<()> {
             f.t,
             &json!({"timestamp": stamp(f.t), "t": f.t, "frame_id": "base_link", "detections": dets}),
         )?;
+        // The same detections for Foxglove's 3D panel (the custom schema above shows only in
+        // Raw Messages): one entity, replaced every frame, a sphere 2σ wide per landmark.
+        let pose = |x: f64, y: f64, z: f64| json!({"position": {"x": x, "y": y, "z": z}, "orientation": yaw(0.0)});
+        let spheres: Vec<_> = f.detections.iter().map(|d| {
+            let (sx, sy) = (2.0 * d.cov[0][0].max(0.0).sqrt(), 2.0 * d.cov[1][1].max(0.0).sqrt());
+            json!({"pose": pose(d.xy[0], d.xy[1], 0.5), "size": {"x": sx.max(0.2), "y": sy.max(0.2), "z": 0.2},
+                   "color": {"r": 0.95, "g": 0.6, "b": 0.1, "a": 0.8}})
+        }).collect();
+        let texts: Vec<_> = f.detections.iter().map(|d| {
+            json!({"pose": pose(d.xy[0], d.xy[1], 1.2), "billboard": true, "font_size": 14.0, "scale_invariant": true,
+                   "color": {"r": 1.0, "g": 1.0, "b": 1.0, "a": 1.0}, "text": d.id.to_string()})
+        }).collect();
+        log.write(
+            "/detections/scene",
+            f.t,
+            &json!({"deletions": [], "entities": [{"timestamp": stamp(f.t), "frame_id": "base_link", "id": "detections",
+                    "lifetime": stamp(0.0), "frame_locked": true, "cylinders": [], "lines": [], "spheres": spheres, "texts": texts}]}),
+        )?;
         if let Some(scan) = &f.scan {
             // No return is `null`. JSON has no infinity, and Foxglove draws a
             // `foxglove.LaserScan` with no range limits (it takes range_min/range_max as

@@ -94,4 +94,33 @@ def test_the_demo_log_has_the_navigation_topics(qrm_bin, tmp_path):
     assert beliefs and all(abs(sum(e["p"]) - 1.0) < 1e-9 for e in beliefs)
     assert seen["/plan"][0]["goal"] == json.loads((tmp_path / "summary.json").read_text())["goal"]
     assert len(seen["/controller"]) >= 1
-    assert any(e["id"] == "trajectory" for e in seen["/navigation"][0]["entities"])
+    navigation = [e for m in seen["/navigation"] for e in m["entities"]]
+    assert any(e["id"] == "trajectory" for e in navigation)
+    # issue 19: the plan in 3D, and every pipeline step on /log
+    plan = [e for e in navigation if e["id"] == "plan"]
+    assert plan and plan[0]["lines"] and all(len(line["points"]) == 4 for line in plan[0]["lines"])
+    messages = [m["message"] for m in seen["/log"]]
+    for step in ("mapped by lidar", "plan to landmark", "transition ", "navigation to landmark"):
+        assert any(step in m for m in messages), (step, messages)
+
+
+def test_detections_are_drawn_in_3d_as_well(qrm_bin, tmp_path):
+    """/detections (a custom schema, Raw Messages only in Foxglove) is mirrored on
+    /detections/scene as foxglove.SceneUpdate spheres at the same positions (issue 19)."""
+    subprocess.run([qrm_bin, "sim", "--scenario", "hallway", "--seed", "2", "--out", str(tmp_path)], check=True, capture_output=True)
+    dets, scenes = {}, {}
+    with open(tmp_path / "run.mcap", "rb") as f:
+        for schema, channel, message in make_reader(f).iter_messages(topics=["/detections", "/detections/scene"]):
+            body = json.loads(message.data)
+            if channel.topic == "/detections":
+                dets[message.log_time] = body["detections"]
+            else:
+                assert schema.name == "foxglove.SceneUpdate"
+                scenes[message.log_time] = body["entities"][0]
+    assert dets.keys() == scenes.keys() and any(dets.values())
+    for t, d in dets.items():
+        e = scenes[t]
+        assert e["frame_id"] == "base_link" and len(e["spheres"]) == len(d) == len(e["texts"])
+        for det, sphere, text in zip(d, e["spheres"], e["texts"]):
+            assert (sphere["pose"]["position"]["x"], sphere["pose"]["position"]["y"]) == (det["x"], det["y"])
+            assert text["text"] == str(det["id"])

@@ -197,21 +197,16 @@ impl MonteCarloConfig {
 pub struct Stat {
     /// Mean.
     pub mean: f64,
-    /// Standard deviation (population).
+    /// Sample standard deviation over trials (divisor n − 1: `qsr_core::stats`).
     pub std: f64,
 }
 
 impl Stat {
     fn of(values: &[f64]) -> Self {
-        if values.is_empty() {
-            return Self::default();
-        }
-        let n = values.len() as f64;
-        let mean = values.iter().sum::<f64>() / n;
-        let var = values.iter().map(|v| (v - mean) * (v - mean)).sum::<f64>() / n;
+        let s = qsr_core::stats::MeanSd::of(values);
         Self {
-            mean,
-            std: var.sqrt(),
+            mean: s.mean,
+            std: s.sd,
         }
     }
 }
@@ -848,16 +843,9 @@ pub fn noise_check(dataset: &Dataset) -> Result<NoiseCheck> {
             "no landmark pair seen in one frame".into(),
         ));
     }
-    let n = z.len() as f64;
-    let mean = z.iter().sum::<f64>() / n;
-    // Scaled by the largest deviation so squares cannot overflow (a surveyed coordinate of
-    // 1e154 gave `z std inf`, issue 17).
-    let scale = z.iter().fold(0.0_f64, |m, v| m.max((v - mean).abs()));
-    let std = if scale > 0.0 && scale.is_finite() {
-        scale * (z.iter().map(|v| ((v - mean) / scale).powi(2)).sum::<f64>() / n).sqrt()
-    } else {
-        scale
-    };
+    // scaled inside so that squares cannot overflow (a surveyed coordinate of 1e154 gave
+    // `z std inf`, issue 17)
+    let std = qsr_core::stats::MeanSd::of(&z).sd;
     let median = |mut v: Vec<f64>| {
         v.sort_by(f64::total_cmp);
         v[v.len() / 2]
@@ -879,7 +867,7 @@ pub fn noise_check(dataset: &Dataset) -> Result<NoiseCheck> {
         z_std: std,
         z_median_abs,
         suspects,
-        outlier_fraction: z.iter().filter(|v| v.abs() > 3.0).count() as f64 / n,
+        outlier_fraction: z.iter().filter(|v| v.abs() > 3.0).count() as f64 / z.len() as f64,
         median_abs_error: median(abs_err),
     })
 }

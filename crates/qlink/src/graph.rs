@@ -94,6 +94,13 @@ pub struct LinkGraph {
     beta: usize,
 }
 
+/// What [`LinkGraph::dijkstra`] found: costs, predecessors, the target settled first.
+struct Search {
+    dist: Vec<f64>,
+    prev: Vec<usize>,
+    reached: Option<usize>,
+}
+
 /// Costs to a goal from every element (`f64::INFINITY`: no path).
 #[derive(Debug, Clone)]
 pub struct DistanceField {
@@ -227,45 +234,22 @@ impl LinkGraph {
                 "no start element: the robot sees no two landmarks of one map element".into(),
             ));
         }
-        let n = self.graph.node_count();
-        let mut dist = vec![f64::INFINITY; n];
-        let mut prev = vec![usize::MAX; n];
-        let mut heap = BinaryHeap::new();
-        for &s in starts {
-            if s < n && dist[s] > 0.0 {
-                dist[s] = 0.0;
-                heap.push(Reverse((Key(0.0), s)));
-            }
-        }
         let is_goal: BTreeSet<usize> = goals.iter().copied().collect();
-        while let Some(Reverse((Key(d), u))) = heap.pop() {
-            if d > dist[u] {
-                continue;
-            }
-            if is_goal.contains(&u) {
-                let mut elements = vec![u];
-                let mut x = u;
-                while prev[x] != usize::MAX {
-                    x = prev[x];
-                    elements.push(x);
-                }
-                elements.reverse();
-                return Ok(Plan { elements, cost: d });
-            }
-            for e in self.graph.edges(NodeIndex::new(u)) {
-                let v = e.target().index();
-                if excluded.contains(&(u, v)) {
-                    continue;
-                }
-                let nd = d + e.weight().cost;
-                if nd < dist[v] || (nd == dist[v] && u < prev[v]) {
-                    dist[v] = nd;
-                    prev[v] = u;
-                    heap.push(Reverse((Key(nd), v)));
-                }
-            }
+        let search = self.dijkstra(starts, Direction::Outgoing, excluded, Some(&is_goal));
+        let Some(u) = search.reached else {
+            return Err(QlinkError::NoPath { goal });
+        };
+        let mut elements = vec![u];
+        let mut x = u;
+        while search.prev[x] != usize::MAX {
+            x = search.prev[x];
+            elements.push(x);
         }
-        Err(QlinkError::NoPath { goal })
+        elements.reverse();
+        Ok(Plan {
+            elements,
+            cost: search.dist[u],
+        })
     }
 
     /// Costs from every element to the goal's elements (Dijkstra backwards, once per goal).
@@ -277,30 +261,74 @@ impl LinkGraph {
         if goals.is_empty() {
             return Err(QlinkError::UnknownLandmark(goal));
         }
+        let search = self.dijkstra(goals, Direction::Incoming, &BTreeSet::new(), None);
+        Ok(DistanceField {
+            goal,
+            dist: search.dist,
+        })
+    }
+
+    /// Multi-source Dijkstra, the one shortest-path search of the crate: from every element
+    /// of `sources` at cost 0, along edges in `direction` (`Incoming`: backwards, costs *to*
+    /// the sources), skipping the directed edges in `excluded`, stopping at the first element
+    /// of `targets` settled. Ties go to the lower predecessor id, so plans do not depend on
+    /// edge order.
+    ///
+    /// Why not `petgraph::algo::dijkstra`: it starts from one node, returns no predecessors
+    /// (a plan needs them) and breaks ties by heap order; a super-source would mean copying
+    /// the graph per query. The test `agrees_with_petgraph_dijkstra_from_one_source` checks
+    /// this search against it.
+    fn dijkstra(
+        &self,
+        sources: &[usize],
+        direction: Direction,
+        excluded: &BTreeSet<(usize, usize)>,
+        targets: Option<&BTreeSet<usize>>,
+    ) -> Search {
         let n = self.graph.node_count();
         let mut dist = vec![f64::INFINITY; n];
+        let mut prev = vec![usize::MAX; n];
         let mut heap = BinaryHeap::new();
-        for &g in goals {
-            dist[g] = 0.0;
-            heap.push(Reverse((Key(0.0), g)));
+        for &s in sources {
+            if s < n && dist[s] > 0.0 {
+                dist[s] = 0.0;
+                heap.push(Reverse((Key(0.0), s)));
+            }
         }
         while let Some(Reverse((Key(d), u))) = heap.pop() {
             if d > dist[u] {
                 continue;
             }
-            for e in self
-                .graph
-                .edges_directed(NodeIndex::new(u), Direction::Incoming)
-            {
-                let v = e.source().index();
+            if targets.is_some_and(|t| t.contains(&u)) {
+                return Search {
+                    dist,
+                    prev,
+                    reached: Some(u),
+                };
+            }
+            for e in self.graph.edges_directed(NodeIndex::new(u), direction) {
+                let (from, to) = (e.source().index(), e.target().index());
+                let v = if direction == Direction::Outgoing {
+                    to
+                } else {
+                    from
+                };
+                if excluded.contains(&(from, to)) {
+                    continue;
+                }
                 let nd = d + e.weight().cost;
-                if nd < dist[v] {
+                if nd < dist[v] || (nd == dist[v] && u < prev[v]) {
                     dist[v] = nd;
+                    prev[v] = u;
                     heap.push(Reverse((Key(nd), v)));
                 }
             }
         }
-        Ok(DistanceField { goal, dist })
+        Search {
+            dist,
+            prev,
+            reached: None,
+        }
     }
 
     fn edge_index(&self, from: usize, to: usize) -> Option<EdgeIndex> {

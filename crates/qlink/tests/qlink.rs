@@ -592,3 +592,59 @@ fn beta_two_transitions_search_for_the_unseen_link() {
         "the shared landmark not yet in view"
     );
 }
+
+#[test]
+fn agrees_with_petgraph_dijkstra_from_one_source() {
+    // Plans and distance fields come from one multi-source Dijkstra of our own (petgraph's
+    // starts from one node and returns no predecessors); from a single start, its costs must
+    // be petgraph's.
+    use rand::{RngExt, SeedableRng};
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(11);
+    let positions: BTreeMap<u32, [f64; 2]> = (0..20u32)
+        .map(|i| {
+            (
+                i,
+                [rng.random_range(0.0..50.0), rng.random_range(0.0..50.0)],
+            )
+        })
+        .collect();
+    let map = exact_map(&positions, 15.0);
+    let price = |i: usize, j: usize, _: &[u32]| ((i * 31 + j * 17) % 7 + 1) as f64 * 0.5;
+    let g = LinkGraph::new(&map, 1, price).unwrap();
+    assert!(g.n_edges() > 20, "a graph worth searching");
+    let mut compared = 0;
+    for goal in [0u32, 7, 13] {
+        let goals = map.elements_with(goal).to_vec();
+        let field = g.distance_field(&map, goal).unwrap();
+        for s in 0..g.n_elements().min(40) {
+            let reference = petgraph::algo::dijkstra(
+                g.graph(),
+                petgraph::graph::NodeIndex::new(s),
+                None,
+                |e| e.weight().cost,
+            );
+            let best = goals
+                .iter()
+                .filter_map(|t| reference.get(&petgraph::graph::NodeIndex::new(*t)))
+                .copied()
+                .fold(f64::INFINITY, f64::min);
+            assert!(
+                (field.cost(s) - best).abs() < 1e-9 || field.cost(s) == best,
+                "field from {s}"
+            );
+            match g.plan(&map, &[s], goal, &BTreeSet::new()) {
+                Ok(plan) => {
+                    assert!(
+                        (plan.cost - best).abs() < 1e-9,
+                        "plan from {s}: {} vs {best}",
+                        plan.cost
+                    );
+                    compared += 1;
+                }
+                Err(QlinkError::NoPath { .. }) => assert!(best.is_infinite()),
+                Err(e) => panic!("{e}"),
+            }
+        }
+    }
+    assert!(compared > 30, "{compared} plans compared");
+}

@@ -8,6 +8,7 @@
 //! | `/tf` | `foxglove.FrameTransform` | the true robot pose, `world` → `base_link` |
 //! | `/log` | `foxglove.Log` | events |
 //! | `/detections` | `qrm.LandmarkDetections` | detections: id, x, y, covariance (robot frame), exact time `t` |
+//! | `/detections/scene` | `foxglove.SceneUpdate` | the same detections drawn in 3D: a sphere per landmark (2σ wide) and its id, in `base_link` |
 //!
 //! Time stamps are simulated (or recorded) time. The writer emits chunks of at most 256 KiB as
 //! it goes, so a run killed midway leaves a file readable up to its last finished chunk
@@ -84,7 +85,7 @@ fn foxglove_schema(name: &str) -> String {
             json!({"deletions": {"type": "array"}, "entities": {"type": "array", "items": {"type": "object", "properties": {
                 "timestamp": time_props(), "frame_id": {"type": "string"}, "id": {"type": "string"},
                 "lifetime": time_props(), "frame_locked": {"type": "boolean"},
-                "cylinders": {"type": "array"}, "lines": {"type": "array"}, "texts": {"type": "array"}}}}}),
+                "cylinders": {"type": "array"}, "spheres": {"type": "array"}, "lines": {"type": "array"}, "texts": {"type": "array"}}}}}),
         ),
     }
 }
@@ -161,6 +162,7 @@ impl McapLog {
             "qrm.LandmarkDetections",
             Some(DETECTIONS_SCHEMA),
         )?;
+        log.add_channel("/detections/scene", "foxglove.SceneUpdate", None)?;
         Ok(log)
     }
 

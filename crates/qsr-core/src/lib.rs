@@ -79,6 +79,7 @@ pub mod reason;
 #[cfg(feature = "svg")]
 mod render;
 mod spec;
+pub mod stats;
 pub mod text_file;
 
 pub use builtin::{BUILTIN_NAMES, BUILTIN_SPECS, POINT_CALCULI, builtin_spec};

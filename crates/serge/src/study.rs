@@ -140,10 +140,8 @@ pub struct CvSummary {
 }
 
 fn mean_sd(v: &[f64]) -> (f64, f64) {
-    let n = v.len().max(1) as f64;
-    let m = v.iter().sum::<f64>() / n;
-    let var = v.iter().map(|x| (x - m) * (x - m)).sum::<f64>() / (n - 1.0).max(1.0);
-    (m, var.sqrt())
+    let s = qsr_core::stats::MeanSd::of(v);
+    (s.mean, s.sd)
 }
 
 /// Fold of each data point: a seeded shuffle per belief, dealt round-robin.
