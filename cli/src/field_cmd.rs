@@ -11,7 +11,7 @@ use qlink::field::{
 };
 use serde_json::json;
 
-use crate::output::{Staging, write_atomic};
+use crate::output::{CsvTable, Staging, write_atomic};
 use crate::qlink_cmd::FieldArgs;
 
 /// Thesis Table 4.2: (|P|, paths, mean trajectory length m).
@@ -161,36 +161,53 @@ fn write_outputs(
     pooled: &[FieldSummary],
     secs: f64,
 ) -> Result<()> {
-    let mut csv = String::from(
-        "world,seed,variant,trial,start_x,start_y,goal,result,plan_len,replans,length,final_distance,detections,aliased\n",
-    );
+    let mut csv = CsvTable::new([
+        "world",
+        "seed",
+        "variant",
+        "trial",
+        "start_x",
+        "start_y",
+        "goal",
+        "result",
+        "plan_len",
+        "replans",
+        "length",
+        "final_distance",
+        "detections",
+        "aliased",
+    ])?;
     for (w, t) in trials {
-        let _ = writeln!(
-            csv,
-            "{w},{},{},{},{:.3},{:.3},{},{},{},{},{:.3},{:.3},{},{}",
-            worlds[*w].seed,
-            t.variant.name(),
-            t.task.trial,
-            t.task.start[0],
-            t.task.start[1],
-            t.task.goal,
-            t.result.name(),
-            t.plan_len,
-            t.replans,
-            t.length,
-            t.final_distance,
-            t.detections,
-            t.aliased
-        );
+        csv.row([
+            w.to_string(),
+            (worlds[*w].seed).to_string(),
+            (t.variant.name()).to_string(),
+            (t.task.trial).to_string(),
+            format!("{:.3}", t.task.start[0]),
+            format!("{:.3}", t.task.start[1]),
+            (t.task.goal).to_string(),
+            (t.result.name()).to_string(),
+            (t.plan_len).to_string(),
+            (t.replans).to_string(),
+            format!("{:.3}", t.length),
+            format!("{:.3}", t.final_distance),
+            (t.detections).to_string(),
+            (t.aliased).to_string(),
+        ])?;
     }
-    write_atomic(&out.join("trials.csv"), csv.as_bytes())?;
-    let mut t42 = String::from("variant,plan_len,paths,mean_length\n");
+    csv.write(&out.join("trials.csv"))?;
+    let mut t42 = CsvTable::new(["variant", "plan_len", "paths", "mean_length"])?;
     for x in pooled {
         for (k, n, l) in &x.by_plan_len {
-            let _ = writeln!(t42, "{},{k},{n},{l:.3}", x.variant.name());
+            t42.row([
+                (x.variant.name()).to_string(),
+                k.to_string(),
+                n.to_string(),
+                format!("{l:.3}"),
+            ])?;
         }
     }
-    write_atomic(&out.join("table_4_2.csv"), t42.as_bytes())?;
+    t42.write(&out.join("table_4_2.csv"))?;
     let per_world: Vec<serde_json::Value> = worlds
         .iter()
         .map(|w| json!({"seed": w.seed, "mapping": w.stats, "draws": w.draws, "variants": w.summaries}))

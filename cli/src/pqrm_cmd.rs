@@ -17,7 +17,7 @@ use qsr_core::Calculus;
 use serde_json::json;
 
 use crate::args::{CalibrateArgs, MapArgs, MergeArgs, PqrmCmd, RealArgs, StudyArgs};
-use crate::output::{Staging, write_atomic};
+use crate::output::{CsvTable, Staging, write_atomic};
 use crate::plot::{self, Series};
 
 /// Runs one `pqrm` subcommand.
@@ -538,14 +538,24 @@ fn study(a: StudyArgs) -> Result<()> {
     Ok(())
 }
 
-fn csv_join(values: &[String]) -> String {
-    values.join(",")
-}
-
 fn write_study(out: &Path, r: &MonteCarloResult, secs: f64) -> Result<()> {
-    let mut csv = String::from(
-        "calculus,sigma_r,sigma_n,trials,n_sets,mean_entropy,mean_entropy_std,normalized_entropy,normalized_entropy_std,error_rate,error_rate_std,p_ml,p_ml_std,neighbor_distance,neighbor_distance_std\n",
-    );
+    let mut csv = CsvTable::new([
+        "calculus",
+        "sigma_r",
+        "sigma_n",
+        "trials",
+        "n_sets",
+        "mean_entropy",
+        "mean_entropy_std",
+        "normalized_entropy",
+        "normalized_entropy_std",
+        "error_rate",
+        "error_rate_std",
+        "p_ml",
+        "p_ml_std",
+        "neighbor_distance",
+        "neighbor_distance_std",
+    ])?;
     for l in &r.levels {
         let row = [
             l.calculus.clone(),
@@ -564,47 +574,52 @@ fn write_study(out: &Path, r: &MonteCarloResult, secs: f64) -> Result<()> {
             format!("{:.6}", l.neighbor_distance.mean),
             format!("{:.6}", l.neighbor_distance.std),
         ];
-        writeln!(csv, "{}", csv_join(&row))?;
+        csv.row(&row)?;
     }
-    write_atomic(&out.join("levels.csv"), csv.as_bytes())?;
-    let mut b = String::from("calculus,states,max_entropy,error_rate,neighbor_distance,p_ml\n");
+    csv.write(&out.join("levels.csv"))?;
+    let mut b = CsvTable::new([
+        "calculus",
+        "states",
+        "max_entropy",
+        "error_rate",
+        "neighbor_distance",
+        "p_ml",
+    ])?;
     for (name, base) in &r.baselines {
-        writeln!(
-            b,
-            "{name},{},{:.6},{:.6},{:.6},{:.6}",
-            base.top_n_error.len(),
-            base.entropy,
-            base.error_rate,
-            base.mean_neighbor_distance,
-            base.p_ml
-        )?;
+        b.row([
+            name.to_string(),
+            (base.top_n_error.len()).to_string(),
+            format!("{:.6}", base.entropy),
+            format!("{:.6}", base.error_rate),
+            format!("{:.6}", base.mean_neighbor_distance),
+            format!("{:.6}", base.p_ml),
+        ])?;
     }
-    write_atomic(&out.join("baselines.csv"), b.as_bytes())?;
+    b.write(&out.join("baselines.csv"))?;
     let finest = Calculus::resolve(&r.config.calculi[0])?;
     for (sigma, m) in &r.confusion {
-        let mut c = format!("truth\\ml,{}\n", finest.labels().join(","));
+        let mut c = CsvTable::new(
+            std::iter::once("truth\\ml").chain(finest.labels().iter().map(String::as_str)),
+        )?;
         for (t, row) in m.iter().enumerate() {
-            writeln!(
-                c,
-                "{},{}",
-                finest.labels()[t],
-                row.iter().map(u64::to_string).collect::<Vec<_>>().join(",")
+            c.row(
+                std::iter::once(finest.labels()[t].clone()).chain(row.iter().map(u64::to_string)),
             )?;
         }
-        write_atomic(
-            &out.join(format!("confusion_sigma{sigma}.csv")),
-            c.as_bytes(),
-        )?;
+        c.write(&out.join(format!("confusion_sigma{sigma}.csv")))?;
     }
-    let mut w = String::from("sigma_r,x,y,d_ab,truth,ml\n");
+    let mut w = CsvTable::new(["sigma_r", "x", "y", "d_ab", "truth", "ml"])?;
     for t in &r.wrong {
-        writeln!(
-            w,
-            "{},{:.6},{:.6},{:.4},{},{}",
-            t.sigma_r, t.x, t.y, t.d_ab, t.truth, t.ml
-        )?;
+        w.row([
+            (t.sigma_r).to_string(),
+            format!("{:.6}", t.x),
+            format!("{:.6}", t.y),
+            format!("{:.4}", t.d_ab),
+            (t.truth).to_string(),
+            (t.ml).to_string(),
+        ])?;
     }
-    write_atomic(&out.join("wrong_triplets.csv"), w.as_bytes())?;
+    w.write(&out.join("wrong_triplets.csv"))?;
     write_atomic(
         &out.join("study.json"),
         serde_json::to_string(r)?.as_bytes(),
@@ -1185,20 +1200,18 @@ fn write_temper(
     untempered: &[RealCalculusResult],
     main_tau: &str,
 ) -> Result<()> {
-    let mut csv = String::from("calculus,temper,outlier_rate,log_score,chosen\n");
+    let mut csv = CsvTable::new(["calculus", "temper", "outlier_rate", "log_score", "chosen"])?;
     let mut series = Vec::new();
     for f in fits {
         let base = f.untempered_score().unwrap_or(0.0);
         for p in &f.scores {
-            writeln!(
-                csv,
-                "{},{},{},{:.6},{}",
-                f.calculus,
-                p.temper,
-                p.outlier_rate,
-                p.log_score,
-                p.temper == f.chosen
-            )?;
+            csv.row([
+                (f.calculus).to_string(),
+                (p.temper).to_string(),
+                (p.outlier_rate).to_string(),
+                format!("{:.6}", p.log_score),
+                (p.temper == f.chosen).to_string(),
+            ])?;
         }
         series.push(Series::line(
             f.calculus.clone(),
@@ -1208,7 +1221,7 @@ fn write_temper(
                 .collect(),
         ));
     }
-    write_atomic(&out.join("temper.csv"), csv.as_bytes())?;
+    csv.write(&out.join("temper.csv"))?;
     plot::line_chart(
         &out.join("temper_fit"),
         "Held-out log score against τ (relative to τ = 1; the chosen τ is the maximum)",
@@ -1279,9 +1292,16 @@ fn append_report(out: &Path, section: &str) -> Result<()> {
 
 /// `sensor_models.csv` and the "Sensor models and tempering" section appended to `report.md`.
 fn write_sweep(out: &Path, sweep: &[pqrm::study::SensorVariant]) -> Result<()> {
-    let mut csv = String::from(
-        "sensor,temper,calculus,error_rate,majority_error_rate,p_ml_mean,ece,max_gap\n",
-    );
+    let mut csv = CsvTable::new([
+        "sensor",
+        "temper",
+        "calculus",
+        "error_rate",
+        "majority_error_rate",
+        "p_ml_mean",
+        "ece",
+        "max_gap",
+    ])?;
     let mut md = String::from(
         "\n## Sensor models and tempering\n\nThe same frames mapped under each inverse sensor model and tempering exponent τ (each frame's \
          log-likelihood × τ). Heavy tails keep one outlier frame from ruling a state out; τ < 1 counts correlated frames as fewer \
@@ -1289,18 +1309,17 @@ fn write_sweep(out: &Path, sweep: &[pqrm::study::SensorVariant]) -> Result<()> {
          | sensor | τ | calculus | PQRM error | majority vote | ≤ majority | mean P(ML) | ECE | largest gap | calibrated |\n|---|---|---|---|---|---|---|---|---|---|\n",
     );
     for v in sweep {
-        writeln!(
-            csv,
-            "{},{},{},{:.4},{:.4},{:.4},{:.4},{:.4}",
-            v.sensor.label().replace(',', ";"),
-            v.temper,
-            v.calculus,
-            v.error_rate,
-            v.majority_error_rate,
-            v.p_ml_mean,
-            v.ece,
-            v.max_gap
-        )?;
+        // the label "outliers:0.05,30" holds a comma: the csv crate quotes it
+        csv.row([
+            v.sensor.label(),
+            v.temper.to_string(),
+            v.calculus.clone(),
+            format!("{:.4}", v.error_rate),
+            format!("{:.4}", v.majority_error_rate),
+            format!("{:.4}", v.p_ml_mean),
+            format!("{:.4}", v.ece),
+            format!("{:.4}", v.max_gap),
+        ])?;
         writeln!(
             md,
             "| {} | {} | {} | {:.3} | {:.3} | {} | {:.3} | {:.3} | {:.3} | {} |",
@@ -1320,7 +1339,7 @@ fn write_sweep(out: &Path, sweep: &[pqrm::study::SensorVariant]) -> Result<()> {
             if v.max_gap <= 0.05 { "yes" } else { "**no**" }
         )?;
     }
-    write_atomic(&out.join("sensor_models.csv"), csv.as_bytes())?;
+    csv.write(&out.join("sensor_models.csv"))?;
     append_report(out, &md)
 }
 
@@ -1333,9 +1352,16 @@ fn write_robots(out: &Path, robots: &[pqrm::robots::RobotComparison]) -> Result<
         &out.join("robots.json"),
         serde_json::to_string_pretty(robots)?.as_bytes(),
     )?;
-    let mut csv = String::from(
-        "calculus,map,scans,sets,error_rate,mean_entropy,p_ml_mean,merged_error_on_same_sets\n",
-    );
+    let mut csv = CsvTable::new([
+        "calculus",
+        "map",
+        "scans",
+        "sets",
+        "error_rate",
+        "mean_entropy",
+        "p_ml_mean",
+        "merged_error_on_same_sets",
+    ])?;
     let mut md = String::from(
         "\n## Many robots, one map\n\nEach robot mapped alone, all robots' scans through one filter (pooled), and the robots' maps merged \
          by adding log-likelihoods (`qrm pqrm merge`; no common frame needed). A single robot sees fewer triplets, so its error is \
@@ -1346,25 +1372,28 @@ fn write_robots(out: &Path, robots: &[pqrm::robots::RobotComparison]) -> Result<
     );
     for r in robots {
         for row in &r.robots {
-            writeln!(
-                csv,
-                "{},robot{},{},{},{:.4},{:.4},{:.4},{:.4}",
-                r.calculus,
-                row.robot,
-                row.scans,
-                row.metrics.n_sets,
-                row.metrics.error_rate,
-                row.metrics.mean_entropy,
-                row.metrics.p_ml_mean,
-                row.merged_error_on_these_sets
-            )?;
+            csv.row([
+                (r.calculus).to_string(),
+                format!("robot{}", row.robot),
+                (row.scans).to_string(),
+                (row.metrics.n_sets).to_string(),
+                format!("{:.4}", row.metrics.error_rate),
+                format!("{:.4}", row.metrics.mean_entropy),
+                format!("{:.4}", row.metrics.p_ml_mean),
+                format!("{:.4}", row.merged_error_on_these_sets),
+            ])?;
         }
         for (name, m) in [("pooled", &r.pooled), ("merged", &r.merged)] {
-            writeln!(
-                csv,
-                "{},{name},,{},{:.4},{:.4},{:.4},",
-                r.calculus, m.n_sets, m.error_rate, m.mean_entropy, m.p_ml_mean
-            )?;
+            csv.row([
+                (r.calculus).to_string(),
+                name.to_string(),
+                String::new(),
+                (m.n_sets).to_string(),
+                format!("{:.4}", m.error_rate),
+                format!("{:.4}", m.mean_entropy),
+                format!("{:.4}", m.p_ml_mean),
+                String::new(),
+            ])?;
         }
         let best = r
             .robots
@@ -1395,7 +1424,7 @@ fn write_robots(out: &Path, robots: &[pqrm::robots::RobotComparison]) -> Result<
             }
         )?;
     }
-    write_atomic(&out.join("robots.csv"), csv.as_bytes())?;
+    csv.write(&out.join("robots.csv"))?;
     append_report(out, &md)
 }
 
@@ -1421,9 +1450,15 @@ fn write_real(
         )?
         .as_bytes(),
     )?;
-    let mut csv = String::from(
-        "calculus,method,n,mean_entropy,error_rate,mean_neighbor_distance,top_n_error\n",
-    );
+    let mut csv = CsvTable::new([
+        "calculus",
+        "method",
+        "n",
+        "mean_entropy",
+        "error_rate",
+        "mean_neighbor_distance",
+        "top_n_error",
+    ])?;
     for r in results {
         let top = |v: &[f64]| {
             v.iter()
@@ -1431,33 +1466,35 @@ fn write_real(
                 .collect::<Vec<_>>()
                 .join(";")
         };
-        writeln!(
-            csv,
-            "{},pqrm,{},{:.4},{:.4},{:.4},{}",
-            r.calculus,
-            r.pqrm.n_scored,
-            r.pqrm.mean_entropy,
-            r.pqrm.error_rate,
-            r.pqrm.mean_neighbor_distance,
-            top(&r.pqrm.top_n_error)
-        )?;
-        writeln!(
-            csv,
-            "{},majority-vote,{},,{:.4},{:.4},",
-            r.calculus, r.majority.n, r.majority.error_rate, r.majority.mean_neighbor_distance
-        )?;
-        writeln!(
-            csv,
-            "{},per-frame,{},{:.4},{:.4},{:.4},{}",
-            r.calculus,
-            r.per_frame.n,
-            r.per_frame.mean_entropy,
-            r.per_frame.error_rate,
-            r.per_frame.mean_neighbor_distance,
-            top(&r.per_frame.top_n_error)
-        )?;
+        csv.row([
+            (r.calculus).to_string(),
+            "pqrm".to_owned(),
+            (r.pqrm.n_scored).to_string(),
+            format!("{:.4}", r.pqrm.mean_entropy),
+            format!("{:.4}", r.pqrm.error_rate),
+            format!("{:.4}", r.pqrm.mean_neighbor_distance),
+            (top(&r.pqrm.top_n_error)).to_string(),
+        ])?;
+        csv.row([
+            (r.calculus).to_string(),
+            "majority-vote".to_owned(),
+            (r.majority.n).to_string(),
+            String::new(),
+            format!("{:.4}", r.majority.error_rate),
+            format!("{:.4}", r.majority.mean_neighbor_distance),
+            String::new(),
+        ])?;
+        csv.row([
+            (r.calculus).to_string(),
+            "per-frame".to_owned(),
+            (r.per_frame.n).to_string(),
+            format!("{:.4}", r.per_frame.mean_entropy),
+            format!("{:.4}", r.per_frame.error_rate),
+            format!("{:.4}", r.per_frame.mean_neighbor_distance),
+            (top(&r.per_frame.top_n_error)).to_string(),
+        ])?;
     }
-    write_atomic(&out.join("real.csv"), csv.as_bytes())?;
+    csv.write(&out.join("real.csv"))?;
     let edges: Vec<f64> = (0..=15).map(|i| f64::from(i) * 0.2).collect();
     plot::histogram(
         &out.join("fig2_14_entropy_histogram"),

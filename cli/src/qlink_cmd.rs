@@ -7,7 +7,7 @@ use std::time::Instant;
 use anyhow::Result;
 use qlink::study::{SettingInfo, StudyConfig, TableRow, TrialRecord, run_study, table};
 
-use crate::output::{Staging, write_atomic};
+use crate::output::{CsvTable, Staging, write_atomic};
 use crate::plot::{Series, histogram, line_chart};
 
 /// `qrm qlink ...`.
@@ -146,18 +146,38 @@ fn write_outputs(
     secs: f64,
 ) -> Result<()> {
     let t_map: f64 = infos.iter().map(|i| i.build_seconds).sum();
-    let mut csv = String::from("trial,value,pairs,no_path,failures,failure_rate\n");
+    let mut csv = CsvTable::new([
+        "trial",
+        "value",
+        "pairs",
+        "no_path",
+        "failures",
+        "failure_rate",
+    ])?;
     for r in rows {
-        let _ = writeln!(
-            csv,
-            "{},{},{},{},{},{}",
-            r.trial, r.value, r.pairs, r.no_path, r.failures, r.failure_rate
-        );
+        csv.row([
+            (r.trial).to_string(),
+            (r.value).to_string(),
+            (r.pairs).to_string(),
+            (r.no_path).to_string(),
+            (r.failures).to_string(),
+            (r.failure_rate).to_string(),
+        ])?;
     }
-    write_atomic(&out.join("table.csv"), csv.as_bytes())?;
-    let mut csv = String::from(
-        "trial,value,start,goal,plan_len,success,failure,length,transit_length,bound,bound_prop4\n",
-    );
+    csv.write(&out.join("table.csv"))?;
+    let mut csv = CsvTable::new([
+        "trial",
+        "value",
+        "start",
+        "goal",
+        "plan_len",
+        "success",
+        "failure",
+        "length",
+        "transit_length",
+        "bound",
+        "bound_prop4",
+    ])?;
     for r in records {
         let failure = r.failure.map_or(String::new(), |f| {
             serde_json::to_value(f)
@@ -165,23 +185,21 @@ fn write_outputs(
                 .and_then(|v| v.as_str().map(str::to_owned))
                 .unwrap_or_default()
         });
-        let _ = writeln!(
-            csv,
-            "{},{},{},{},{},{},{},{:.3},{:.3},{:.3},{:.3}",
-            r.trial,
-            r.value,
-            r.start,
-            r.goal,
-            r.plan_len,
-            r.success,
-            failure,
-            r.length,
-            r.transit_length,
-            r.bound,
-            r.bound_direct
-        );
+        csv.row([
+            (r.trial).to_string(),
+            (r.value).to_string(),
+            (r.start).to_string(),
+            (r.goal).to_string(),
+            (r.plan_len).to_string(),
+            (r.success).to_string(),
+            (failure).to_string(),
+            format!("{:.3}", r.length),
+            format!("{:.3}", r.transit_length),
+            format!("{:.3}", r.bound),
+            format!("{:.3}", r.bound_direct),
+        ])?;
     }
-    write_atomic(&out.join("records.csv"), csv.as_bytes())?;
+    csv.write(&out.join("records.csv"))?;
     // Fig 4.6: |P| histogram of the baseline (R' = R, no occlusion)
     let base: Vec<f64> = records
         .iter()

@@ -14,7 +14,7 @@ use pqrm::reason_study::{
 };
 use serde_json::json;
 
-use crate::output::{Staging, write_atomic};
+use crate::output::{CsvTable, Staging, write_atomic};
 use crate::plot::{self, Series};
 use crate::reason_cmd::ReasonStudyArgs;
 
@@ -69,7 +69,7 @@ pub fn study(a: &ReasonStudyArgs) -> Result<()> {
         }))?
         .as_bytes(),
     )?;
-    write_atomic(&out_dir.join("scores.csv"), scores_csv(&results).as_bytes())?;
+    scores_csv(&results)?.write(&out_dir.join("scores.csv"))?;
     let mut figures = Vec::new();
     for r in &results {
         figures.extend(reliability(&out_dir, r)?);
@@ -129,29 +129,36 @@ fn rows(r: &ReasonCalculusResult) -> Vec<(&'static str, String, &Score)> {
     v
 }
 
-fn scores_csv(results: &[ReasonCalculusResult]) -> String {
-    let mut csv = String::from(
-        "calculus,part,predictor,n,error_rate,top2_error,mean_neighbor_distance,log_loss,coverage,calibration_error\n",
-    );
+fn scores_csv(results: &[ReasonCalculusResult]) -> Result<CsvTable> {
+    let mut csv = CsvTable::new([
+        "calculus",
+        "part",
+        "predictor",
+        "n",
+        "error_rate",
+        "top2_error",
+        "mean_neighbor_distance",
+        "log_loss",
+        "coverage",
+        "calibration_error",
+    ])?;
     for r in results {
         for (part, pred, s) in rows(r) {
-            let _ = writeln!(
-                csv,
-                "{},{},{},{},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4}",
-                r.calculus,
-                part,
-                pred,
-                s.n,
-                s.error_rate,
-                s.top2_error,
-                s.mean_neighbor_distance,
-                s.log_loss,
-                s.coverage,
-                s.calibration_error
-            );
+            csv.row([
+                (r.calculus).to_string(),
+                (part).to_string(),
+                (pred).to_string(),
+                (s.n).to_string(),
+                format!("{:.4}", s.error_rate),
+                format!("{:.4}", s.top2_error),
+                format!("{:.4}", s.mean_neighbor_distance),
+                format!("{:.4}", s.log_loss),
+                format!("{:.4}", s.coverage),
+                format!("{:.4}", s.calibration_error),
+            ])?;
         }
     }
-    csv
+    Ok(csv)
 }
 
 fn reliability(out: &std::path::Path, r: &ReasonCalculusResult) -> Result<Vec<PathBuf>> {

@@ -11,7 +11,7 @@ use serge::datasets::{DATASETS, Dataset};
 use serge::study::{CvRecord, CvSummary, StudyConfig, cross_validate, summarise};
 use serge::{BeliefSet, CellMasses, Grid, ResolutionTree, SalientRegionMap, Serge, SergeParams};
 
-use crate::output::{Staging, write_atomic};
+use crate::output::{CsvTable, Staging, write_atomic};
 use crate::plot::{RegionPicture, Series, line_chart, region_map};
 
 /// `qrm serge ...`.
@@ -310,45 +310,58 @@ fn study(a: StudyArgs) -> Result<()> {
 }
 
 fn write_records(dir: &Path, records: &[CvRecord], summary: &[CvSummary]) -> Result<()> {
-    let mut csv = String::from(
-        "sweep,mu,sigma,fold,n_regions,train_log_saliency,test_log_likelihood,errors,points,error_rate\n",
-    );
+    let mut csv = CsvTable::new([
+        "sweep",
+        "mu",
+        "sigma",
+        "fold",
+        "n_regions",
+        "train_log_saliency",
+        "test_log_likelihood",
+        "errors",
+        "points",
+        "error_rate",
+    ])?;
     for r in records {
-        let _ = writeln!(
-            csv,
-            "{},{},{},{},{},{},{},{},{},{}",
-            r.sweep,
-            r.mu,
-            r.sigma,
-            r.fold,
-            r.n_regions,
-            r.train_log_saliency,
-            r.test_log_likelihood,
-            r.errors,
-            r.points,
-            r.error_rate()
-        );
+        csv.row([
+            (r.sweep).to_string(),
+            (r.mu).to_string(),
+            (r.sigma).to_string(),
+            (r.fold).to_string(),
+            (r.n_regions).to_string(),
+            (r.train_log_saliency).to_string(),
+            (r.test_log_likelihood).to_string(),
+            (r.errors).to_string(),
+            (r.points).to_string(),
+            (r.error_rate()).to_string(),
+        ])?;
     }
-    write_atomic(&dir.join("cv.csv"), csv.as_bytes())?;
-    let mut csv = String::from(
-        "sweep,mu,sigma,n_regions,n_regions_sd,log_likelihood,log_likelihood_sd,error_rate,error_rate_sd\n",
-    );
+    csv.write(&dir.join("cv.csv"))?;
+    let mut csv = CsvTable::new([
+        "sweep",
+        "mu",
+        "sigma",
+        "n_regions",
+        "n_regions_sd",
+        "log_likelihood",
+        "log_likelihood_sd",
+        "error_rate",
+        "error_rate_sd",
+    ])?;
     for s in summary {
-        let _ = writeln!(
-            csv,
-            "{},{},{},{},{},{},{},{},{}",
-            s.sweep,
-            s.mu,
-            s.sigma,
-            s.n_regions.0,
-            s.n_regions.1,
-            s.log_likelihood.0,
-            s.log_likelihood.1,
-            s.error_rate.0,
-            s.error_rate.1
-        );
+        csv.row([
+            (s.sweep).to_string(),
+            (s.mu).to_string(),
+            (s.sigma).to_string(),
+            (s.n_regions.0).to_string(),
+            (s.n_regions.1).to_string(),
+            (s.log_likelihood.0).to_string(),
+            (s.log_likelihood.1).to_string(),
+            (s.error_rate.0).to_string(),
+            (s.error_rate.1).to_string(),
+        ])?;
     }
-    write_atomic(&dir.join("summary.csv"), csv.as_bytes())?;
+    csv.write(&dir.join("summary.csv"))?;
     Ok(())
 }
 

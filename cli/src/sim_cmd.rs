@@ -6,7 +6,7 @@ use std::path::PathBuf;
 use anyhow::{Context, Result, bail};
 use serde_json::json;
 
-use crate::output::{Staging, write_atomic};
+use crate::output::{CsvTable, Staging, write_atomic};
 use qrm_log::{McapLog, stamp, yaw};
 
 /// Raw flags of `qrm sim`.
@@ -96,11 +96,11 @@ pub fn run(a: SimArgs) -> Result<()> {
         &out_dir.join("world.toml"),
         toml::to_string(sc.world.spec())?.as_bytes(),
     )?;
-    let mut truth_csv = String::from("landmark,x,y\n");
+    let mut truth_csv = CsvTable::new(["landmark", "x", "y"])?;
     for (id, p) in &truth {
-        truth_csv.push_str(&format!("{id},{},{}\n", p[0], p[1]));
+        truth_csv.row([id.to_string(), p[0].to_string(), p[1].to_string()])?;
     }
-    write_atomic(&out_dir.join("truth.csv"), truth_csv.as_bytes())?;
+    truth_csv.write(&out_dir.join("truth.csv"))?;
     write_log(&out_dir.join("run.mcap"), &sc, &frames, &truth)?;
     let traj: Vec<(f64, f64)> = frames.iter().map(|f| (f.pose.x, f.pose.y)).collect();
     let rays: Vec<crate::plot::Segment> = frames

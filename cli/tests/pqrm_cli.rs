@@ -300,7 +300,15 @@ fn a_calculus_of_the_wrong_kind_is_not_called_coincident_landmarks() {
 fn study_with_a_spec_file_calculus_does_not_panic() {
     let out = tmp("study-spec");
     let spec = out.join("mine.toml");
-    std::fs::write(&spec, ok(&["calculus", "spec", "double-cross"], "")).unwrap();
+    // a name with a comma and a quote: joined by hand into levels.csv it shifted every
+    // column after it (issue 19); the csv crate quotes it
+    let text = ok(&["calculus", "spec", "double-cross"], "").replacen(
+        "name = \"double-cross\"",
+        "name = 'double-cross, \"mine\"'",
+        1,
+    );
+    assert!(text.contains("mine"), "the spec names its calculus: {text}");
+    std::fs::write(&spec, text).unwrap();
     let calculi = format!("edc,{}", spec.display());
     ok(
         &[
@@ -319,6 +327,15 @@ fn study_with_a_spec_file_calculus_does_not_panic() {
     let report = std::fs::read_to_string(out.join("report.md")).unwrap();
     assert!(report.contains("Fig 2.11a"));
     assert!(out.join("fig2_11a_error_rate.svg").exists());
+    let mut levels = csv::Reader::from_path(out.join("levels.csv")).unwrap();
+    let width = levels.headers().unwrap().len();
+    let rows: Vec<csv::StringRecord> = levels.records().map(Result::unwrap).collect();
+    assert!(rows.iter().all(|r| r.len() == width));
+    assert!(
+        rows.iter().any(|r| &r[0] == "double-cross, \"mine\""),
+        "{:?}",
+        rows.iter().map(|r| r[0].to_owned()).collect::<Vec<_>>()
+    );
     std::fs::remove_dir_all(&out).ok();
 }
 
