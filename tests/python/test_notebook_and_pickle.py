@@ -52,6 +52,16 @@ def test_a_map_pickles_with_every_belief():
     assert all(np.allclose(n.belief(s), m.belief(s), atol=1e-12) for s in m.sets()[:50])
 
 
+def test_a_salient_region_map_pickles():
+    beliefs = [{"mean": [float(i % 3), float(i // 3)], "cov": [[0.05, 0.0], [0.0, 0.05]]} for i in range(6)]
+    m = qrm.serge(beliefs, 3, sigma=0.0, trials=20, grid=24, seed=1)
+    n = pickle.loads(pickle.dumps(m))
+    assert (n.n_regions, n.assignment, n.initial_regions, n.window) == (m.n_regions, m.assignment, m.initial_regions, m.window)
+    assert np.array_equal(n.cells(), m.cells())
+    pts = np.array([[0.1, 0.2], [1.9, 1.1]])
+    assert list(n.region_of(pts)) == list(m.region_of(pts))
+
+
 def _entropy_in_a_child(m):
     return m.entropy()
 

@@ -141,6 +141,25 @@ impl SalientRegionMap {
             .collect())
     }
 
+    /// Rebuilds a pickled map (its full serde state; see `__reduce__`).
+    #[staticmethod]
+    fn _from_state(state: &str, initial_regions: usize) -> PyResult<Self> {
+        let inner: serge::SalientRegionMap = serde_json::from_str(state)
+            .map_err(|e| invalid(format!("not a pickled SalientRegionMap: {e}")))?;
+        Ok(Self {
+            inner,
+            initial_regions,
+        })
+    }
+
+    /// Pickles as its full state (multiprocessing, Ray).
+    fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<(Bound<'py, PyAny>, (String, usize))> {
+        let ctor = slf.get_type().getattr("_from_state")?;
+        let me = slf.get();
+        let state = serde_json::to_string(&me.inner).map_err(|e| invalid(e.to_string()))?;
+        Ok((ctor, (state, me.initial_regions)))
+    }
+
     /// The map as JSON (what `qrm serge run` writes as map.json).
     fn to_json(&self) -> PyResult<String> {
         serde_json::to_string(&self.inner.to_json()).map_err(|e| invalid(e.to_string()))
