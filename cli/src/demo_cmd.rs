@@ -165,13 +165,14 @@ pub fn run(a: DemoArgs) -> Result<()> {
     }
     let range = a.nav_range;
     let nav_config = NavConfig {
-        controller: Controller::new(ControllerKind::MidpointSweep, range),
-        pomdp: pomdps[0].clone(),
-        step: 1.0,
         replan: true,
         max_replans: 3,
         map_range: sc.detector.range,
         find_goal: true,
+        ..NavConfig::thesis(
+            Controller::new(ControllerKind::MidpointSweep, range),
+            pomdps[0].clone(),
+        )
     };
     let perception = WorldPerception::new(&sc.world, range);
     // start and goal: along the mapping drive (every frame that recognised three landmarks

@@ -30,12 +30,45 @@ fn quick_study_writes_table_4_1() {
     let mut lines = table.lines();
     assert_eq!(
         lines.next(),
-        Some("trial,value,pairs,no_path,failures,failure_rate")
+        Some(
+            "trial,value,schedule,pairs,no_path,failures,failure_rate,thesis_failure_rate,mean_length,over_prop2_bound"
+        )
     );
-    let rows: Vec<Vec<String>> = lines
-        .map(|l| l.split(',').map(str::to_owned).collect())
+    let all: Vec<Vec<String>> = lines
+        .map(|l| {
+            // the schedule holds a comma, quoted
+            let (a, rest) = l.split_once(",\"").unwrap();
+            let (sched, b) = rest.split_once("\",").unwrap();
+            let mut v: Vec<String> = a.split(',').map(str::to_owned).collect();
+            v.push(sched.to_owned());
+            v.extend(b.split(',').map(str::to_owned));
+            v
+        })
+        .collect();
+    // 9 main rows, and the 4 occlusion sizes under 3 further schedules
+    assert_eq!(all.len(), 21);
+    let rows: Vec<Vec<String>> = all
+        .iter()
+        .filter(|r| r[2] == "continuous, 1 fallback")
+        .map(|r| {
+            let mut r = r.clone();
+            r.remove(2);
+            r
+        })
         .collect();
     assert_eq!(rows.len(), 9);
+    // issue 18: the occlusion study can fail (sensing only at stops, no fallback circle)
+    let sparse: usize = all
+        .iter()
+        .filter(|r| r[2] == "stops every 30°, 0 fallbacks")
+        .map(|r| r[5].parse::<usize>().unwrap())
+        .sum();
+    assert!(sparse > 0, "{all:?}");
+    let report = std::fs::read_to_string(out.join("report.md")).unwrap();
+    assert!(
+        !report.contains("Idealised run"),
+        "the default robot is the thesis's"
+    );
     let get = |trial: &str, value: &str| {
         rows.iter()
             .find(|r| r[0] == trial && r[1] == value)

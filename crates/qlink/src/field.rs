@@ -991,13 +991,12 @@ pub fn nav_config(
         Controller::new(ControllerKind::MidpointSweep, field.stats.effective_range)
     };
     NavConfig {
-        controller,
-        pomdp,
         step: params.step,
         replan: true,
         max_replans: params.max_replans,
         map_range: field.scenario.lidar.max_range,
         find_goal: true,
+        ..NavConfig::thesis(controller, pomdp)
     }
 }
 

@@ -13,7 +13,8 @@
 //!    midpoint-and-sweep, the closest point (a QP), or a safe search.
 //!
 //! [`Navigator`] runs the three with a [`Perception`] (range-only or sim2d's occlusion) and
-//! re-plans around failed transitions; [`study`] reproduces §4.4.1 and [`field`] the
+//! re-plans around failed transitions; [`execution`] holds how it senses and remembers (the
+//! thesis's robot by default, idealised options named as such); [`study`] reproduces §4.4.1 and [`field`] the
 //! lidar-only field-site experiment of §4.4.2.
 //!
 //! ## Why it is built this way
@@ -36,19 +37,20 @@
 
 pub mod controller;
 mod error;
+pub mod execution;
 pub mod field;
 pub mod graph;
 pub mod map;
 pub mod navigate;
+pub mod perception;
 pub mod pomdp;
 pub mod study;
 
 pub use controller::{Controller, ControllerKind, circle, closest_point, robot_state};
 pub use error::{QlinkError, Result};
+pub use execution::{Arrival, Odometry, References, Sensing};
 pub use graph::{CostModel, DistanceField, LinkEdge, LinkGraph, Plan};
 pub use map::{Layer, MapElement, QualitativeMap};
-pub use navigate::{
-    Failure, NavConfig, NavOutcome, Navigator, Perception, RangePerception, TransitionRecord,
-    WorldPerception,
-};
+pub use navigate::{Failure, NavConfig, NavOutcome, Navigator, TransitionRecord};
+pub use perception::{Perception, RangePerception, WorldPerception};
 pub use pomdp::{Decision, SearchPomdp};

@@ -1,158 +1,50 @@
 //! Executing a plan: the three levels together (thesis §4.3), with contingency re-planning.
 //!
 //! The robot starts wherever it is, localises in any element two of whose landmarks it sees
-//! (circling the nearest visible landmark at sensor range if it sees none: Proposition 1's
+//! (circling the nearest visible landmark at radius R if it sees none: Proposition 1's
 //! search), plans over the Link Graph, and makes each transition `M_i → M_j`:
 //!
 //! 1. *Search for the link* `L ∈ M_i ∩ M_j` in the frame of `M_i`'s other two landmarks: the
 //!    POMDP picks the state to search (the map's distribution over `{A, B : L}`), the
-//!    controller drives there, "not seen" updates the belief; after the horizon a full
-//!    circle about the references' midpoint at sensor range is the fallback.
-//! 2. *Acquire `M_j`'s frame*: the transition completes when two landmarks of `M_j` are seen
-//!    at once (`L_j^ref ⊆ L^vis`, §4.4.1). If seeing the link is not enough, the robot
-//!    circles the link at sensor range (the link stays in view; Proposition 1 guarantees a
-//!    second landmark of `M_j` comes into view when the assumptions hold).
+//!    controller drives there, "not seen" updates the belief; after the horizon, full
+//!    circles about the references' midpoint at radius R are the fallback
+//!    ([`NavConfig::fallbacks`]). The frame is placed where the robot perceives the
+//!    references, or where it last perceived them ([`References`]).
+//! 2. *Acquire `M_j`'s frame*: the transition completes when `M_j`'s reference landmarks are
+//!    seen at once (`L_j^ref ⊆ L^vis_t`, §4.4.1; [`Arrival`]). If seeing the link is not
+//!    enough, the robot circles the link at radius R.
+//!
+//! R is the controller's radius — the mapping robot's range in the thesis's study, whatever
+//! the navigating robot's sensor range R' is.
 //!
 //! A failed transition is excluded and the robot re-plans from the elements it sees
 //! (§4.4.2's contingency plan). Each outcome reports |P|, the trajectory length and the
 //! bound of Proposition 2, `(2π + 1)·R·|P|`.
 //!
-//! The simulation moves the robot exactly along the controller's waypoints and checks what
-//! it sees every `step` metres through a [`Perception`]: range only ([`RangePerception`]) or
-//! sim2d's full occlusion ([`WorldPerception`]).
+//! The simulation moves the robot exactly along the controller's waypoints and senses where
+//! [`Sensing`] says through a [`Perception`]: range only ([`RangePerception`]) or sim2d's full
+//! occlusion ([`WorldPerception`]).
 
-use std::collections::{BTreeSet, HashMap};
+use std::collections::BTreeSet;
 
 use serde::{Deserialize, Serialize};
 
 use crate::controller::{Controller, circle, robot_state};
 use crate::error::{QlinkError, Result};
+pub use crate::execution::{Arrival, Odometry, References, Sensing};
+use crate::execution::{Leg, Walker};
 use crate::graph::{DistanceField, LinkGraph, Plan};
 use crate::map::QualitativeMap;
+use crate::perception::d;
+pub use crate::perception::{Perception, RangePerception, WorldPerception};
 use crate::pomdp::SearchPomdp;
 
-/// Search circles run at the sensor range, a hair inside so that the landmark circled stays
-/// detected despite rounding (Proposition 1 needs the full range R).
+/// Search circles run at the controller's radius R, a hair inside so that a landmark circled
+/// at the sensor's full range stays detected despite rounding (Proposition 1 needs R' ≥ R).
 const SEARCH_RADIUS: f64 = 1.0 - 1e-9;
 
-/// What the robot detects.
-pub trait Perception: Sync {
-    /// The landmark's position (the simulator's; the robot uses it only as a measurement
-    /// relative to itself when it sees the landmark).
-    fn position(&self, id: u32) -> Option<[f64; 2]>;
-    /// Whether `id` is detected from `pos`.
-    fn sees(&self, pos: [f64; 2], id: u32) -> bool;
-    /// Every landmark detected from `pos`, sorted.
-    fn visible(&self, pos: [f64; 2]) -> Vec<u32>;
-    /// The sensor range.
-    fn range(&self) -> f64;
-}
-
-/// Point landmarks detected within a range (no occlusion).
-#[derive(Debug, Clone)]
-pub struct RangePerception {
-    ids: Vec<u32>,
-    pos: Vec<[f64; 2]>,
-    index: HashMap<u32, usize>,
-    range: f64,
-}
-
-impl RangePerception {
-    /// Landmarks `(id, position)` seen within `range`.
-    #[must_use]
-    pub fn new(landmarks: &[(u32, [f64; 2])], range: f64) -> Self {
-        let mut sorted = landmarks.to_vec();
-        sorted.sort_by_key(|l| l.0);
-        Self {
-            index: sorted.iter().enumerate().map(|(i, l)| (l.0, i)).collect(),
-            ids: sorted.iter().map(|l| l.0).collect(),
-            pos: sorted.iter().map(|l| l.1).collect(),
-            range,
-        }
-    }
-}
-
-fn d(a: [f64; 2], b: [f64; 2]) -> f64 {
-    (a[0] - b[0]).hypot(a[1] - b[1])
-}
-
-impl Perception for RangePerception {
-    fn position(&self, id: u32) -> Option<[f64; 2]> {
-        self.index.get(&id).map(|&i| self.pos[i])
-    }
-    fn sees(&self, pos: [f64; 2], id: u32) -> bool {
-        self.index
-            .get(&id)
-            .is_some_and(|&i| d(pos, self.pos[i]) <= self.range)
-    }
-    fn visible(&self, pos: [f64; 2]) -> Vec<u32> {
-        self.ids
-            .iter()
-            .zip(&self.pos)
-            .filter(|(_, p)| d(pos, **p) <= self.range)
-            .map(|(id, _)| *id)
-            .collect()
-    }
-    fn range(&self) -> f64 {
-        self.range
-    }
-}
-
-/// Landmarks of a sim2d world, detected within range only when fully visible (§4.4.1).
-#[derive(Debug)]
-pub struct WorldPerception<'w> {
-    world: &'w sim2d::World,
-    index: HashMap<u32, usize>,
-    range: f64,
-}
-
-impl<'w> WorldPerception<'w> {
-    /// Perception in `world` with `range`.
-    #[must_use]
-    pub fn new(world: &'w sim2d::World, range: f64) -> Self {
-        Self {
-            index: world
-                .spec()
-                .landmarks
-                .iter()
-                .enumerate()
-                .map(|(i, l)| (l.id, i))
-                .collect(),
-            world,
-            range,
-        }
-    }
-}
-
-impl Perception for WorldPerception<'_> {
-    fn position(&self, id: u32) -> Option<[f64; 2]> {
-        self.index
-            .get(&id)
-            .map(|&i| self.world.spec().landmarks[i].pos)
-    }
-    fn sees(&self, pos: [f64; 2], id: u32) -> bool {
-        self.index.get(&id).is_some_and(|&i| {
-            d(pos, self.world.spec().landmarks[i].pos) <= self.range
-                && self.world.is_fully_visible(pos, i)
-        })
-    }
-    fn visible(&self, pos: [f64; 2]) -> Vec<u32> {
-        let mut out: Vec<u32> = self
-            .world
-            .spec()
-            .landmarks
-            .iter()
-            .enumerate()
-            .filter(|(i, l)| d(pos, l.pos) <= self.range && self.world.is_fully_visible(pos, *i))
-            .map(|(_, l)| l.id)
-            .collect();
-        out.sort_unstable();
-        out
-    }
-    fn range(&self) -> f64 {
-        self.range
-    }
-}
+/// Waypoint spacing of search circles (deg).
+const CIRCLE_STEP_DEG: f64 = 2.0;
 
 /// Navigation settings.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -176,6 +68,53 @@ pub struct NavConfig {
     /// the recogniser, not the simulator, says what is seen).
     #[serde(default)]
     pub find_goal: bool,
+    /// Where the positions of unseen references come from (thesis: what was perceived,
+    /// carried forward by odometry; [`References::Oracle`] is idealised).
+    #[serde(default)]
+    pub references: References,
+    /// When a transition is complete (thesis: `M_j`'s reference landmarks seen).
+    #[serde(default)]
+    pub arrival: Arrival,
+    /// Where along its paths the robot senses.
+    #[serde(default)]
+    pub sensing: Sensing,
+    /// Full circles about the references' midpoint after the POMDP's commands fail to find
+    /// a link (the fallback budget of a search).
+    #[serde(default = "one")]
+    pub fallbacks: usize,
+}
+
+fn one() -> usize {
+    1
+}
+
+impl NavConfig {
+    /// The thesis's navigator (§4.4.1) with `controller` and `pomdp`: sensing every metre, no
+    /// re-planning, arrival when the next frame's references are seen, unseen references
+    /// where they were last seen (wheel odometry), one fallback circle per search, and a
+    /// mapping range equal to the controller's radius.
+    #[must_use]
+    pub fn thesis(controller: Controller, pomdp: SearchPomdp) -> Self {
+        Self {
+            map_range: controller.radius,
+            controller,
+            pomdp,
+            step: 1.0,
+            replan: false,
+            max_replans: 0,
+            find_goal: false,
+            references: References::default(),
+            arrival: Arrival::default(),
+            sensing: Sensing::default(),
+            fallbacks: 1,
+        }
+    }
+
+    /// The idealised options that are on (the reports label such runs).
+    #[must_use]
+    pub fn idealised(&self) -> Vec<&'static str> {
+        crate::execution::idealised(self.references, self.arrival)
+    }
 }
 
 /// Why a navigation failed.
@@ -205,6 +144,9 @@ pub struct TransitionRecord {
     pub success: bool,
     /// Trajectory length of this transition (m).
     pub length: f64,
+    /// Where the robot was when the transition ended.
+    #[serde(default)]
+    pub end: [f64; 2],
 }
 
 /// The result of one navigation.
@@ -253,54 +195,23 @@ impl NavOutcome {
     }
 }
 
+/// What follows an element of a plan: the next element, or the goal.
+#[derive(Debug, Clone, Copy)]
+enum Next {
+    Element(usize),
+    Goal(u32),
+}
+
+const CIRCLE: Leg = Leg::Circle {
+    step_deg: CIRCLE_STEP_DEG,
+};
+
 /// Runs navigations against one map and graph.
 pub struct Navigator<'a, P: Perception> {
     map: &'a QualitativeMap,
     graph: &'a LinkGraph,
     perception: &'a P,
     config: &'a NavConfig,
-}
-
-struct Walker<'p, P: Perception> {
-    perception: &'p P,
-    pos: [f64; 2],
-    length: f64,
-    step: f64,
-    trajectory: Vec<[f64; 2]>,
-    record: bool,
-}
-
-impl<P: Perception> Walker<'_, P> {
-    /// Follows waypoints, checking `stop` every `step`; true when it stopped.
-    fn walk(&mut self, path: &[[f64; 2]], stop: &mut dyn FnMut(&P, [f64; 2]) -> bool) -> bool {
-        if stop(self.perception, self.pos) {
-            return true;
-        }
-        for &target in path {
-            let seg = d(self.pos, target);
-            if seg == 0.0 {
-                continue;
-            }
-            let n = (seg / self.step).ceil().max(1.0) as usize;
-            let from = self.pos;
-            for k in 1..=n {
-                let t = k as f64 / n as f64;
-                let p = [
-                    from[0] + t * (target[0] - from[0]),
-                    from[1] + t * (target[1] - from[1]),
-                ];
-                self.length += d(self.pos, p);
-                self.pos = p;
-                if self.record {
-                    self.trajectory.push(p);
-                }
-                if stop(self.perception, p) {
-                    return true;
-                }
-            }
-        }
-        false
-    }
 }
 
 impl<'a, P: Perception> Navigator<'a, P> {
@@ -323,6 +234,8 @@ impl<'a, P: Perception> Navigator<'a, P> {
                 config.map_range
             )));
         }
+        config.references.check()?;
+        config.sensing.check()?;
         Ok(Self {
             map,
             graph,
@@ -364,15 +277,14 @@ impl<'a, P: Perception> Navigator<'a, P> {
         if self.map.elements_with(goal).is_empty() {
             return Err(QlinkError::UnknownLandmark(goal));
         }
-        let range = self.perception.range();
-        let mut w = Walker {
-            perception: self.perception,
-            pos: start,
-            length: 0.0,
-            step: self.config.step,
-            trajectory: vec![start],
+        let range = self.config.controller.radius;
+        let mut w = Walker::new(
+            self.perception,
+            start,
+            self.config.step,
+            self.config.sensing,
             record,
-        };
+        );
         let mut out = NavOutcome::unfinished(None);
         let Some(mut starts) = self.localise(&mut w, range) else {
             out.failure = Some(Failure::NoStart);
@@ -447,8 +359,13 @@ impl<'a, P: Perception> Navigator<'a, P> {
                 first = false;
             }
             let mut failed = None;
-            for pair in plan.elements.windows(2) {
-                let rec = self.transition(&mut w, pair[0], pair[1])?;
+            for (k, pair) in plan.elements.windows(2).enumerate() {
+                let next = match plan.elements.get(k + 2) {
+                    Some(&n) => Next::Element(n),
+                    None => Next::Goal(goal),
+                };
+                let mut rec = self.transition(&mut w, pair[0], pair[1], next)?;
+                rec.end = w.pos;
                 let ok = rec.success;
                 out.transitions.push(rec);
                 if !ok {
@@ -522,9 +439,11 @@ impl<'a, P: Perception> Navigator<'a, P> {
             .iter()
             .filter_map(|&id| self.perception.position(id).map(|p| (id, p)))
             .min_by(|a, b| d(a.1, pos).total_cmp(&d(b.1, pos)))?;
-        let path = circle(anchor.1, range * SEARCH_RADIUS, pos, 2.0);
+        // circling the anchor keeps it in view: at R, or at R' when the sensor is shorter
+        let keep = range.min(self.perception.range());
+        let path = circle(anchor.1, keep * SEARCH_RADIUS, pos, CIRCLE_STEP_DEG);
         let map = self.map;
-        let found = w.walk(&path, &mut |p: &P, x| {
+        let found = w.walk(&path, CIRCLE, &mut |p: &P, x| {
             !map.elements_in_view(&p.visible(x)).is_empty()
         });
         if found {
@@ -534,14 +453,38 @@ impl<'a, P: Perception> Navigator<'a, P> {
         }
     }
 
-    /// Whether two landmarks of element `j` are seen from `x`.
-    fn in_frame(p: &P, map: &QualitativeMap, j: usize, x: [f64; 2]) -> bool {
-        map.elements()[j]
-            .landmarks
+    /// The pairs of `M_j`'s landmarks whose sight completes a transition into `j`: under
+    /// [`Arrival::References`] those framing what comes next (the pair left when a link to
+    /// the next element, or the goal, is taken out), under [`Arrival::AnyTwo`] all three.
+    fn references(&self, j: usize, next: Next) -> Vec<[u32; 2]> {
+        let [a, b, c] = self.map.elements()[j].landmarks;
+        let all = [[b, c], [a, c], [a, b]];
+        let framed: Vec<u32> = match (self.config.arrival, next) {
+            (Arrival::AnyTwo, _) => return all.to_vec(),
+            (Arrival::References, Next::Element(n)) => self
+                .graph
+                .edge(j, n)
+                .map(|e| e.links().to_vec())
+                .unwrap_or_default(),
+            (Arrival::References, Next::Goal(g)) => vec![g],
+        };
+        let pairs: Vec<[u32; 2]> = [a, b, c]
             .iter()
-            .filter(|&&l| p.sees(x, l))
-            .count()
-            >= 2
+            .zip(all)
+            .filter(|(l, _)| framed.contains(l))
+            .map(|(_, pair)| pair)
+            .collect();
+        // an element that holds neither (not reachable from a plan) keeps the loose rule
+        if pairs.is_empty() {
+            all.to_vec()
+        } else {
+            pairs
+        }
+    }
+
+    /// Whether one of `pairs` is seen at once from `x`.
+    fn in_frame(p: &P, pairs: &[[u32; 2]], x: [f64; 2]) -> bool {
+        pairs.iter().any(|&[a, b]| p.sees(x, a) && p.sees(x, b))
     }
 
     /// Searches for `link` in the frame of element `i`'s other two landmarks: the POMDP's
@@ -555,22 +498,23 @@ impl<'a, P: Perception> Navigator<'a, P> {
         commands: &mut Vec<usize>,
     ) -> Result<bool> {
         let map = self.map;
-        let range = self.perception.range();
+        let range = self.config.controller.radius;
         let others: Vec<u32> = map.elements()[i]
             .landmarks
             .iter()
             .copied()
             .filter(|&l| l != link)
             .collect();
-        let refs: Option<([f64; 2], [f64; 2], [u32; 2])> = match others.as_slice() {
-            [a, b] => match (self.perception.position(*a), self.perception.position(*b)) {
-                (Some(pa), Some(pb)) => Some((pa, pb, [*a, *b])),
-                _ => None,
-            },
-            _ => None,
-        };
-        let Some((pa, pb, [a, b])) = refs else {
+        let [a, b] = others.as_slice() else {
             return Ok(false);
+        };
+        let (a, b) = (*a, *b);
+        w.watch(&[a, b]);
+        let refs = self.config.references;
+        // the frame as the robot places it now: measured, remembered, or not at all
+        let frame = |w: &mut Walker<'_, P>| match (w.place(a, refs), w.place(b, refs)) {
+            (Some(pa), Some(pb)) if d(pa, pb) > 0.0 => Some((pa, pb)),
+            _ => None,
         };
         let calculus = map.calculus(i);
         let mut belief = map
@@ -584,6 +528,9 @@ impl<'a, P: Perception> Navigator<'a, P> {
             &own
         };
         for step in 0..pomdp.horizon {
+            let Some((pa, pb)) = frame(w) else {
+                return Ok(false);
+            };
             let r = robot_state(calculus, pa, pb, w.pos)?;
             let dec = pomdp.decide_with(r, &belief, pomdp.horizon - step)?;
             commands.push(dec.action);
@@ -592,18 +539,32 @@ impl<'a, P: Perception> Navigator<'a, P> {
                 .controller
                 .path(calculus, pa, pb, dec.action, w.pos)?;
             let stop = &mut |p: &P, x: [f64; 2]| p.sees(x, link);
-            if w.walk(&path[1..], stop) {
+            if w.walk(&path[1..], Leg::Command, stop) {
                 return Ok(true);
             }
             belief = pomdp.update_not_seen(&belief, dec.action);
         }
-        // fallback: a full circle about the references' midpoint at sensor range
-        let m = [(pa[0] + pb[0]) / 2.0, (pa[1] + pb[1]) / 2.0];
-        let path = circle(m, range * SEARCH_RADIUS, w.pos, 2.0);
-        Ok(w.walk(&path[1..], &mut |p: &P, x| p.sees(x, link)))
+        // fallback: full circles about the references' midpoint at radius R
+        for _ in 0..self.config.fallbacks {
+            let Some((pa, pb)) = frame(w) else {
+                return Ok(false);
+            };
+            let m = [(pa[0] + pb[0]) / 2.0, (pa[1] + pb[1]) / 2.0];
+            let path = circle(m, range * SEARCH_RADIUS, w.pos, CIRCLE_STEP_DEG);
+            if w.walk(&path[1..], CIRCLE, &mut |p: &P, x| p.sees(x, link)) {
+                return Ok(true);
+            }
+        }
+        Ok(false)
     }
 
-    fn transition(&self, w: &mut Walker<'_, P>, i: usize, j: usize) -> Result<TransitionRecord> {
+    fn transition(
+        &self,
+        w: &mut Walker<'_, P>,
+        i: usize,
+        j: usize,
+        next: Next,
+    ) -> Result<TransitionRecord> {
         let start_len = w.length;
         let map = self.map;
         let links = self
@@ -626,8 +587,10 @@ impl<'a, P: Perception> Navigator<'a, P> {
             commands: Vec::new(),
             success: false,
             length: 0.0,
+            end: w.pos,
         };
-        let range = self.perception.range();
+        let range = self.config.controller.radius;
+        let refs = self.references(j, next);
         let done = |w: &mut Walker<'_, P>, rec: &mut TransitionRecord| {
             rec.success = true;
             rec.length = w.length - start_len;
@@ -641,13 +604,13 @@ impl<'a, P: Perception> Navigator<'a, P> {
             // all the way to the link (not just until M_j is in view), so the next
             // transition starts at a landmark again (Proposition 3)
             rec.commands.push(usize::MAX);
-            w.walk(&[pl], &mut |_: &P, _| false);
-            if Self::in_frame(self.perception, map, j, w.pos) {
+            w.walk(&[pl], Leg::Command, &mut |_: &P, _| false);
+            if Self::in_frame(self.perception, &refs, w.pos) {
                 done(w, &mut rec);
                 return Ok(rec);
             }
         }
-        if Self::in_frame(self.perception, map, j, w.pos) {
+        if Self::in_frame(self.perception, &refs, w.pos) {
             done(w, &mut rec);
             return Ok(rec);
         }
@@ -657,7 +620,7 @@ impl<'a, P: Perception> Navigator<'a, P> {
             return Ok(rec);
         }
         // phase 2: two landmarks of M_j at once
-        if Self::in_frame(self.perception, map, j, w.pos) {
+        if Self::in_frame(self.perception, &refs, w.pos) {
             done(w, &mut rec);
             return Ok(rec);
         }
@@ -665,8 +628,12 @@ impl<'a, P: Perception> Navigator<'a, P> {
             rec.length = w.length - start_len;
             return Ok(rec);
         };
-        let path = circle(pl, range * SEARCH_RADIUS, w.pos, 2.0);
-        let ok = w.walk(&path[1..], &mut |p: &P, x| Self::in_frame(p, map, j, x));
+        // circling the link keeps it in view: at R, or at R' when the sensor is shorter
+        let keep = range.min(self.perception.range());
+        let path = circle(pl, keep * SEARCH_RADIUS, w.pos, CIRCLE_STEP_DEG);
+        let ok = w.walk(&path[1..], CIRCLE, &mut |p: &P, x| {
+            Self::in_frame(p, &refs, x)
+        });
         if ok {
             done(w, &mut rec);
         } else {

@@ -2,12 +2,16 @@
 //!
 //! Set-up (DESIGN §7): the sim2d `qlink-200` world (200 landmarks in 200 m × 200 m) mapped by
 //! a robot with range R = 20 m and detection noise N(0, 0.3) into a PQRM with the `quadrant`
-//! calculus; a Link Graph with β = 1 and unit costs; the arc controller; a horizon-4 search
-//! POMDP. Every ordered (start, goal) landmark pair is navigated (39,800 of them) for sensor
+//! calculus; a Link Graph with β = 1 and unit costs; the arc controller driving arcs and
+//! fallback circles of radius R whatever the sensor range R' (§4.4.1); a horizon-4 search
+//! POMDP; the thesis's robot of [`crate::execution`] (unseen references where last seen,
+//! arrival on the next frame's references), idealised options named in [`StudyConfig`]. Every ordered (start, goal) landmark pair is navigated (39,800 of them) for sensor
 //! ranges R'/R ∈ {1, 0.9, 0.8, 0.7, 0.6} without occlusion, and for landmark sizes
 //! {0.1, 0.3, 0.5, 0.7} m with full occlusion at R' = R. A navigation fails when a transition
 //! fails (no re-planning, as in the thesis); pairs without a path in the link graph are
-//! counted apart. The sensor-range trial maps point landmarks without occlusion (one map for
+//! counted apart. The occlusion trial is also run under further sensing schedules and
+//! fallback budgets ([`Schedule`]), which decide how often an occluded link is found and which
+//! the thesis does not give. The sensor-range trial maps point landmarks without occlusion (one map for
 //! its five settings); each occlusion setting maps its own world of discs, with occlusion
 //! (the whole experiment happens in that environment).
 
@@ -16,6 +20,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::controller::{Controller, ControllerKind};
 use crate::error::{QlinkError, Result};
+use crate::execution::{Arrival, References, Sensing};
 use crate::graph::{DistanceField, LinkGraph};
 use crate::map::QualitativeMap;
 use crate::navigate::{
@@ -25,6 +30,50 @@ use crate::pomdp::SearchPomdp;
 
 /// The mapping robot's range R (m).
 pub const MAP_RANGE: f64 = 20.0;
+
+/// Where the robot senses and how many fallback circles a search may drive: the knobs that
+/// decide how often an occluded landmark is found.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Schedule {
+    /// Where along its paths the robot senses.
+    pub sensing: Sensing,
+    /// Fallback circles per link search.
+    pub fallbacks: usize,
+}
+
+impl Schedule {
+    /// Every metre, one fallback circle: the main table's schedule.
+    pub const CONTINUOUS: Self = Self {
+        sensing: Sensing::Continuous,
+        fallbacks: 1,
+    };
+}
+
+impl std::fmt::Display for Schedule {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self.sensing {
+            Sensing::Continuous => write!(f, "continuous")?,
+            Sensing::AtStops { degrees } => write!(f, "stops every {degrees}°")?,
+        }
+        write!(
+            f,
+            ", {} fallback{}",
+            self.fallbacks,
+            if self.fallbacks == 1 { "" } else { "s" }
+        )
+    }
+}
+
+/// The radius of the arcs and search circles.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum ArcRadius {
+    /// The mapping robot's range R (§4.4.1: "an arc of radius R", "a circle of radius R").
+    #[default]
+    MapRange,
+    /// The navigating robot's range R' (not the thesis's controller; labelled in reports).
+    SensorRange,
+}
 
 /// What the study runs.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -43,6 +92,41 @@ pub struct StudyConfig {
     pub step: f64,
     /// Seed (world, mapping noise, pair selection).
     pub seed: u64,
+    /// Where unseen references are taken from.
+    #[serde(default)]
+    pub references: References,
+    /// When a transition is complete.
+    #[serde(default)]
+    pub arrival: Arrival,
+    /// Radius of arcs and search circles.
+    #[serde(default)]
+    pub radius: ArcRadius,
+    /// The schedule of every setting.
+    #[serde(default = "continuous")]
+    pub schedule: Schedule,
+    /// Further schedules whose occlusion rows are reported beside the main table.
+    #[serde(default)]
+    pub occlusion_schedules: Vec<Schedule>,
+    /// Pairs per setting of those further rows (`None`: as `pairs`).
+    #[serde(default)]
+    pub schedule_pairs: Option<usize>,
+}
+
+fn continuous() -> Schedule {
+    Schedule::CONTINUOUS
+}
+
+/// One setting of the study: a trial at a value under a schedule.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Setting {
+    /// `sensor-range` or `occlusion`.
+    pub trial: String,
+    /// R'/R or the landmark size (m).
+    pub value: f64,
+    /// Sensing and fallbacks.
+    pub schedule: Schedule,
+    /// Pairs to navigate (`None`: the config's).
+    pub pairs: Option<usize>,
 }
 
 impl StudyConfig {
@@ -57,6 +141,25 @@ impl StudyConfig {
             samples: 200,
             step: 1.0,
             seed,
+            references: References::default(),
+            arrival: Arrival::default(),
+            radius: ArcRadius::MapRange,
+            schedule: Schedule::CONTINUOUS,
+            occlusion_schedules: vec![
+                Schedule {
+                    sensing: Sensing::Continuous,
+                    fallbacks: 0,
+                },
+                Schedule {
+                    sensing: Sensing::AtStops { degrees: 30.0 },
+                    fallbacks: 1,
+                },
+                Schedule {
+                    sensing: Sensing::AtStops { degrees: 30.0 },
+                    fallbacks: 0,
+                },
+            ],
+            schedule_pairs: Some(8000),
         }
     }
 
@@ -65,20 +168,22 @@ impl StudyConfig {
     pub fn quick(seed: u64) -> Self {
         Self {
             pairs: Some(400),
+            schedule_pairs: Some(400),
             samples: 100,
             ..Self::full(seed)
         }
     }
 
-    /// The settings to run: `(trial, value)`.
+    /// The settings to run: the main table's trials, then the occlusion trial under each
+    /// further schedule.
     ///
     /// # Errors
     /// [`QlinkError::InvalidParameter`] for an unknown trial name, zero pairs (an empty table
-    /// is not a result), no settings, or a non-positive/non-finite setting, sample count or
-    /// step.
-    pub fn settings(&self) -> Result<Vec<(String, f64)>> {
+    /// is not a result), no settings, or a non-positive/non-finite setting, sample count,
+    /// step or sensing angle.
+    pub fn settings(&self) -> Result<Vec<Setting>> {
         let bad = |m: String| Err(QlinkError::InvalidParameter(m));
-        if self.pairs == Some(0) {
+        if self.pairs == Some(0) || self.schedule_pairs == Some(0) {
             return bad("pairs must be >= 1 (or all)".into());
         }
         if self.samples == 0 || self.samples > 1_000_000 {
@@ -100,26 +205,79 @@ impl StudyConfig {
                 "range factors and sizes must be finite and > 0, got {v}"
             ));
         }
-        let range = self
-            .range_factors
-            .iter()
-            .map(|&v| ("sensor-range".to_owned(), v));
-        let occ = self.sizes.iter().map(|&v| ("occlusion".to_owned(), v));
-        match self.trial.as_str() {
-            "sensor-range" => Ok(range.collect()),
-            "occlusion" => Ok(occ.collect()),
-            "all" => Ok(range.chain(occ).collect()),
-            t => Err(QlinkError::InvalidParameter(format!(
-                "unknown trial `{t}` (sensor-range, occlusion, all)"
-            ))),
+        self.references.check()?;
+        for s in std::iter::once(&self.schedule).chain(&self.occlusion_schedules) {
+            s.sensing.check()?;
         }
-        .and_then(|v: Vec<(String, f64)>| {
-            if v.is_empty() {
-                bad(format!("trial `{}` has no settings to run", self.trial))
-            } else {
-                Ok(v)
+        let main = |trial: &str, value: f64| Setting {
+            trial: trial.to_owned(),
+            value,
+            schedule: self.schedule,
+            pairs: self.pairs,
+        };
+        let range = self.range_factors.iter().map(|&v| main("sensor-range", v));
+        let occ = self.sizes.iter().map(|&v| main("occlusion", v));
+        let extra = self.occlusion_schedules.iter().flat_map(|&schedule| {
+            self.sizes.iter().map(move |&value| Setting {
+                trial: "occlusion".to_owned(),
+                value,
+                schedule,
+                pairs: self.schedule_pairs.or(self.pairs),
+            })
+        });
+        let v: Vec<Setting> = match self.trial.as_str() {
+            "sensor-range" => range.collect(),
+            "occlusion" => occ.chain(extra).collect(),
+            "all" => range.chain(occ).chain(extra).collect(),
+            t => {
+                return bad(format!(
+                    "unknown trial `{t}` (sensor-range, occlusion, all)"
+                ));
             }
+        };
+        if v.is_empty() {
+            return bad(format!("trial `{}` has no settings to run", self.trial));
+        }
+        Ok(v)
+    }
+
+    /// The navigation settings of `setting`: the thesis's robot with this study's options.
+    ///
+    /// # Errors
+    /// POMDP parameter errors (none for these values).
+    pub fn nav_config(&self, setting: &Setting) -> Result<NavConfig> {
+        let sensor = sensor_range(setting);
+        let radius = match self.radius {
+            ArcRadius::MapRange => MAP_RANGE,
+            ArcRadius::SensorRange => sensor,
+        };
+        Ok(NavConfig {
+            references: self.references,
+            arrival: self.arrival,
+            sensing: setting.schedule.sensing,
+            fallbacks: setting.schedule.fallbacks,
+            ..nav_config(radius, self.step)?
         })
+    }
+
+    /// The idealised options this study runs with (empty: the thesis's robot).
+    #[must_use]
+    pub fn idealised(&self) -> Vec<&'static str> {
+        let mut out = crate::execution::idealised(self.references, self.arrival);
+        if self.radius == ArcRadius::SensorRange {
+            out.push("arcs and circles of the sensor's R', not the mapping robot's R");
+        }
+        out
+    }
+}
+
+/// The navigating robot's sensor range in a setting (m).
+#[must_use]
+pub fn sensor_range(setting: &Setting) -> f64 {
+    if setting.trial == "sensor-range" {
+        setting.value * MAP_RANGE
+    } else {
+        MAP_RANGE
     }
 }
 
@@ -130,6 +288,8 @@ pub struct TrialRecord {
     pub trial: String,
     /// R'/R or the landmark size.
     pub value: f64,
+    /// Sensing and fallbacks.
+    pub schedule: Schedule,
     /// Start landmark.
     pub start: u32,
     /// Goal landmark.
@@ -225,13 +385,12 @@ pub fn build_world(seed: u64, samples: usize, size: Option<f64>) -> Result<Study
 pub fn nav_config(range: f64, step: f64) -> Result<NavConfig> {
     let quadrant = qsr_core::Calculus::builtin("quadrant")?;
     Ok(NavConfig {
-        controller: Controller::new(ControllerKind::Arc, range),
-        pomdp: SearchPomdp::new(&quadrant, false, 1.0, 0.9, 4)?,
         step,
-        replan: false,
-        max_replans: 0,
         map_range: MAP_RANGE,
-        find_goal: false,
+        ..NavConfig::thesis(
+            Controller::new(ControllerKind::Arc, range),
+            SearchPomdp::new(&quadrant, false, 1.0, 0.9, 4)?,
+        )
     })
 }
 
@@ -274,18 +433,22 @@ pub fn fields(world: &StudyWorld, pairs: &[(u32, u32)]) -> Result<Vec<(u32, Dist
         .collect()
 }
 
-#[allow(clippy::too_many_arguments)] // private glue between run_setting's two perceptions
 fn run_pairs<P: Perception>(
     world: &StudyWorld,
     perception: &P,
     config: &NavConfig,
     pairs: &[(u32, u32)],
     fields: &[(u32, DistanceField)],
-    offset: f64,
-    (trial, value): (&str, f64),
+    setting: &Setting,
     progress: &(dyn Fn() + Sync),
 ) -> Result<Vec<TrialRecord>> {
     let nav = Navigator::new(&world.map, &world.graph, perception, config)?;
+    // start beside the start landmark, clear of its disc in the occlusion trial
+    let offset = if setting.trial == "occlusion" {
+        setting.value + 0.5
+    } else {
+        0.5
+    };
     pairs
         .par_iter()
         .map(|&(s, g)| {
@@ -301,8 +464,9 @@ fn run_pairs<P: Perception>(
             };
             progress();
             Ok(TrialRecord {
-                trial: trial.to_owned(),
-                value,
+                trial: setting.trial.clone(),
+                value: setting.value,
+                schedule: setting.schedule,
                 start: s,
                 goal: g,
                 plan_len: outcome.plan_len,
@@ -327,38 +491,19 @@ pub fn run_setting(
     config: &StudyConfig,
     pairs: &[(u32, u32)],
     fields: &[(u32, DistanceField)],
-    (trial, value): (&str, f64),
+    setting: &Setting,
     progress: &(dyn Fn() + Sync),
 ) -> Result<Vec<TrialRecord>> {
-    match trial {
+    let nav = config.nav_config(setting)?;
+    let range = sensor_range(setting);
+    match setting.trial.as_str() {
         "sensor-range" => {
-            let range = value * MAP_RANGE;
             let perception = RangePerception::new(&world.landmarks, range);
-            let nav = nav_config(range, config.step)?;
-            run_pairs(
-                world,
-                &perception,
-                &nav,
-                pairs,
-                fields,
-                0.5,
-                (trial, value),
-                progress,
-            )
+            run_pairs(world, &perception, &nav, pairs, fields, setting, progress)
         }
         "occlusion" => {
-            let perception = WorldPerception::new(&world.scenario.world, MAP_RANGE);
-            let nav = nav_config(MAP_RANGE, config.step)?;
-            run_pairs(
-                world,
-                &perception,
-                &nav,
-                pairs,
-                fields,
-                value + 0.5,
-                (trial, value),
-                progress,
-            )
+            let perception = WorldPerception::new(&world.scenario.world, range);
+            run_pairs(world, &perception, &nav, pairs, fields, setting, progress)
         }
         t => Err(QlinkError::InvalidParameter(format!("unknown trial `{t}`"))),
     }
@@ -371,6 +516,8 @@ pub struct TableRow {
     pub trial: String,
     /// R'/R or size.
     pub value: f64,
+    /// Sensing and fallbacks.
+    pub schedule: Schedule,
     /// Pairs navigated.
     pub pairs: usize,
     /// Pairs without a path in the link graph.
@@ -381,24 +528,24 @@ pub struct TableRow {
     pub failure_rate: f64,
     /// Successful runs whose transitions were longer than Proposition 2's bound.
     pub over_bound: usize,
+    /// Mean trajectory length of the successful runs (m).
+    pub mean_length: f64,
 }
 
-/// Table 4.1 from records.
+/// Table 4.1 from records: one row per (trial, value, schedule), in the records' order.
 #[must_use]
 pub fn table(records: &[TrialRecord]) -> Vec<TableRow> {
-    let mut keys: Vec<(String, u64)> = Vec::new();
+    let key = |r: &TrialRecord| (r.trial.clone(), r.value.to_bits(), r.schedule.to_string());
+    let mut keys: Vec<(String, u64, String)> = Vec::new();
     for r in records {
-        let k = (r.trial.clone(), r.value.to_bits());
+        let k = key(r);
         if !keys.contains(&k) {
             keys.push(k);
         }
     }
     keys.into_iter()
-        .map(|(trial, bits)| {
-            let sel: Vec<&TrialRecord> = records
-                .iter()
-                .filter(|r| r.trial == trial && r.value.to_bits() == bits)
-                .collect();
+        .map(|k| {
+            let sel: Vec<&TrialRecord> = records.iter().filter(|r| key(r) == k).collect();
             let no_path = sel
                 .iter()
                 .filter(|r| r.failure == Some(Failure::NoPath))
@@ -408,24 +555,25 @@ pub fn table(records: &[TrialRecord]) -> Vec<TableRow> {
                 .filter(|r| !r.success && r.failure != Some(Failure::NoPath))
                 .count();
             let with_path = sel.len() - no_path;
+            let successes: Vec<&&TrialRecord> = sel.iter().filter(|r| r.success).collect();
             TableRow {
-                trial,
-                value: f64::from_bits(bits),
+                trial: k.0,
+                value: f64::from_bits(k.1),
+                schedule: sel[0].schedule,
                 pairs: sel.len(),
                 no_path,
                 failures,
                 failure_rate: failures as f64 / with_path.max(1) as f64,
-                over_bound: sel
+                over_bound: successes
                     .iter()
-                    .filter(|r| r.success && r.transit_length > r.bound + 1e-9)
+                    .filter(|r| r.transit_length > r.bound + 1e-9)
                     .count(),
+                mean_length: successes.iter().map(|r| r.length).sum::<f64>()
+                    / successes.len().max(1) as f64,
             }
         })
         .collect()
 }
-
-/// A mapped world with its pairs and their goals' distance fields.
-type Prepared = (StudyWorld, Vec<(u32, u32)>, Vec<(u32, DistanceField)>);
 
 /// What one setting of a study run used and took.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -434,6 +582,8 @@ pub struct SettingInfo {
     pub trial: String,
     /// R'/R or size.
     pub value: f64,
+    /// Sensing and fallbacks.
+    pub schedule: Schedule,
     /// Mapping frames.
     pub frames: usize,
     /// Map elements.
@@ -446,9 +596,13 @@ pub struct SettingInfo {
     pub navigate_seconds: f64,
 }
 
+/// A mapped world with the distance fields of every goal.
+type Prepared = (StudyWorld, Vec<(u32, DistanceField)>);
+
 /// Runs every setting of `config`: one point-landmark map for the sensor-range trial, one
-/// map per landmark size for the occlusion trial. `progress` is called after every
-/// navigation (`total` navigations are announced first through `start`).
+/// map per landmark size for the occlusion trial (shared by its schedules). `progress` is
+/// called after every navigation (each setting's navigations are announced first through
+/// `start`).
 ///
 /// # Errors
 /// As [`build_world`] and [`run_setting`].
@@ -458,38 +612,30 @@ pub fn run_study(
     progress: &(dyn Fn() + Sync),
 ) -> Result<(Vec<TrialRecord>, Vec<SettingInfo>)> {
     let settings = config.settings()?;
-    let mut shared: Option<Prepared> = None;
+    // worlds by landmark size (`None`: the point landmarks of the sensor-range trial)
+    let mut worlds: Vec<(Option<u64>, Prepared)> = Vec::new();
     let mut records = Vec::new();
     let mut infos = Vec::new();
-    for (trial, value) in settings {
+    for setting in &settings {
         let t = std::time::Instant::now();
-        let own;
-        let (world, pairs, fields) = if trial == "occlusion" {
-            let w = build_world(config.seed, config.samples, Some(value))?;
-            let p = pairs(&w.landmarks, config.pairs, config.seed);
-            let f = fields(&w, &p)?;
-            own = (w, p, f);
-            (&own.0, &own.1, &own.2)
-        } else {
-            if shared.is_none() {
-                let w = build_world(config.seed, config.samples, None)?;
-                let p = pairs(&w.landmarks, config.pairs, config.seed);
-                let f = fields(&w, &p)?;
-                shared = Some((w, p, f));
-            }
-            let sh = shared.as_ref().ok_or(QlinkError::EmptyMap)?;
-            (&sh.0, &sh.1, &sh.2)
-        };
+        let size = (setting.trial == "occlusion").then_some(setting.value);
+        let key = size.map(f64::to_bits);
+        if !worlds.iter().any(|w| w.0 == key) {
+            let w = build_world(config.seed, config.samples, size)?;
+            let f = fields(&w, &pairs(&w.landmarks, None, config.seed))?;
+            worlds.push((key, (w, f)));
+        }
+        let (world, fields) = worlds
+            .iter()
+            .find(|w| w.0 == key)
+            .map(|w| (&w.1.0, &w.1.1))
+            .ok_or(QlinkError::EmptyMap)?;
+        let pairs = pairs(&world.landmarks, setting.pairs, config.seed);
         let build_seconds = t.elapsed().as_secs_f64();
         start(pairs.len());
         let tn = std::time::Instant::now();
         records.extend(run_setting(
-            world,
-            config,
-            pairs,
-            fields,
-            (&trial, value),
-            progress,
+            world, config, &pairs, fields, setting, progress,
         )?);
         infos.push(SettingInfo {
             frames: world.frames,
@@ -497,9 +643,131 @@ pub fn run_study(
             edges: world.graph.n_edges(),
             build_seconds,
             navigate_seconds: tn.elapsed().as_secs_f64(),
-            trial,
-            value,
+            trial: setting.trial.clone(),
+            value: setting.value,
+            schedule: setting.schedule,
         });
     }
     Ok((records, infos))
+}
+
+/// The direction of a series, as a report states it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Trend {
+    /// Never falls, and rises overall by more than the tolerance.
+    Rises,
+    /// Never rises, and falls overall by more than the tolerance.
+    Falls,
+    /// Every value within the tolerance of the first.
+    Flat,
+    /// Rises and falls.
+    Mixed,
+}
+
+impl Trend {
+    /// The trend of `values` in order; steps within `tolerance` count as level.
+    #[must_use]
+    pub fn of(values: &[f64], tolerance: f64) -> Self {
+        let first = values.first().copied().unwrap_or(0.0);
+        if values.iter().all(|v| (v - first).abs() <= tolerance) {
+            return Self::Flat;
+        }
+        let up = values.windows(2).any(|w| w[1] > w[0] + tolerance);
+        let down = values.windows(2).any(|w| w[1] < w[0] - tolerance);
+        match (up, down) {
+            (true, false) => Self::Rises,
+            (false, true) => Self::Falls,
+            (false, false) => Self::Flat,
+            (true, true) => Self::Mixed,
+        }
+    }
+
+    /// "rises", "falls", "is flat", "rises and falls".
+    #[must_use]
+    pub fn phrase(self) -> &'static str {
+        match self {
+            Self::Rises => "rises",
+            Self::Falls => "falls",
+            Self::Flat => "is flat",
+            Self::Mixed => "rises and falls",
+        }
+    }
+}
+
+/// Mean trajectory length of the successful runs of `records` selected by `of`, per |P|,
+/// weighted by how often each |P| occurs among the successful runs selected by `like`: a
+/// comparison of two settings that is not skewed by their different mixes of plan lengths.
+/// `None` when they share no |P|.
+#[must_use]
+pub fn matched_length(
+    records: &[TrialRecord],
+    of: &dyn Fn(&TrialRecord) -> bool,
+    like: &dyn Fn(&TrialRecord) -> bool,
+) -> Option<f64> {
+    use std::collections::BTreeMap;
+    let mut mine: BTreeMap<usize, (f64, usize)> = BTreeMap::new();
+    let mut weights: BTreeMap<usize, usize> = BTreeMap::new();
+    for r in records.iter().filter(|r| r.success && r.plan_len > 0) {
+        if of(r) {
+            let e = mine.entry(r.plan_len).or_default();
+            e.0 += r.length;
+            e.1 += 1;
+        }
+        if like(r) {
+            *weights.entry(r.plan_len).or_default() += 1;
+        }
+    }
+    let (mut sum, mut total) = (0.0, 0usize);
+    for (p, w) in weights {
+        if let Some(&(l, n)) = mine.get(&p) {
+            sum += w as f64 * l / n as f64;
+            total += w;
+        }
+    }
+    (total > 0).then(|| sum / total as f64)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_flat_series_is_flat_not_growing() {
+        // issue 14/18: "0.0 % → 0.0 % → 0.0 % → 0.0 %" was reported as growing
+        assert_eq!(Trend::of(&[0.0, 0.0, 0.0, 0.0], 1e-9), Trend::Flat);
+        assert_eq!(Trend::of(&[0.0, 0.01, 0.01, 0.2], 1e-9), Trend::Rises);
+        assert_eq!(Trend::of(&[0.3, 0.2, 0.2], 1e-9), Trend::Falls);
+        assert_eq!(Trend::of(&[0.1, 0.3, 0.2], 1e-9), Trend::Mixed);
+        assert_eq!(Trend::of(&[0.1, 0.1005, 0.1], 0.001), Trend::Flat);
+    }
+
+    fn rec(trial: &str, plan_len: usize, length: f64) -> TrialRecord {
+        TrialRecord {
+            trial: trial.into(),
+            value: 1.0,
+            schedule: Schedule::CONTINUOUS,
+            start: 0,
+            goal: 1,
+            plan_len,
+            success: true,
+            failure: None,
+            length,
+            transit_length: length,
+            bound: 1e9,
+            bound_direct: 1e9,
+        }
+    }
+
+    #[test]
+    fn matched_length_compares_like_plan_lengths() {
+        // a: longer at every |P| but mostly short plans; b: mostly long plans
+        let mut v = vec![rec("a", 1, 20.0), rec("a", 1, 20.0), rec("a", 5, 120.0)];
+        v.extend([rec("b", 1, 10.0), rec("b", 5, 100.0), rec("b", 5, 100.0)]);
+        let a = matched_length(&v, &|r| r.trial == "a", &|r| r.trial == "b").unwrap();
+        let b = matched_length(&v, &|r| r.trial == "b", &|r| r.trial == "b").unwrap();
+        assert!((a - (20.0 + 2.0 * 120.0) / 3.0).abs() < 1e-12);
+        assert!((b - 70.0).abs() < 1e-12);
+        assert!(a > b, "raw means would say the opposite");
+    }
 }

@@ -152,13 +152,13 @@ fn bad_input_gets_clear_errors() {
 fn config(kind: ControllerKind, range: f64) -> NavConfig {
     let quadrant = Calculus::builtin("quadrant").unwrap();
     NavConfig {
-        controller: Controller::new(kind, range),
-        pomdp: SearchPomdp::new(&quadrant, false, 1.0, 0.9, 4).unwrap(),
         step: 0.5,
         replan: true,
         max_replans: 3,
-        map_range: range,
-        find_goal: false,
+        ..NavConfig::thesis(
+            Controller::new(kind, range),
+            SearchPomdp::new(&quadrant, false, 1.0, 0.9, 4).unwrap(),
+        )
     }
 }
 

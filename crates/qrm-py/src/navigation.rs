@@ -79,13 +79,14 @@ pub(crate) fn navigate(
         let calc = map.layers()[0].calculus().clone();
         let graph = LinkGraph::new(&map, beta, |_, _, _| 1.0)?;
         let config = NavConfig {
-            controller: Controller::new(kind, range),
-            pomdp: SearchPomdp::new(&calc, false, 1.0, 0.9, horizon)?,
             step: 0.5,
             replan,
             max_replans: 3,
             map_range,
-            find_goal: false,
+            ..NavConfig::thesis(
+                Controller::new(kind, range),
+                SearchPomdp::new(&calc, false, 1.0, 0.9, horizon)?,
+            )
         };
         let perception = RangePerception::new(&landmarks, range);
         let nav = Navigator::new(&map, &graph, &perception, &config)?;

@@ -1,0 +1,128 @@
+//! What the robot detects: the [`Perception`] trait and the two simulated sensors behind it,
+//! range only ([`RangePerception`]) and sim2d's full occlusion ([`WorldPerception`]).
+//!
+//! A perception answers "is landmark `id` detected from here?". It also knows where the
+//! landmark is ([`Perception::position`]), because a simulated detection *measures* that
+//! position relative to the robot; the navigator reads it only for a landmark it detects at
+//! that moment, and otherwise falls back on what it remembers (see [`crate::execution`]).
+
+use std::collections::HashMap;
+
+/// What the robot detects.
+pub trait Perception: Sync {
+    /// The landmark's position: what a detection measures. The navigator reads it only for a
+    /// landmark detected at that moment ([`crate::execution::References`]).
+    fn position(&self, id: u32) -> Option<[f64; 2]>;
+    /// Whether `id` is detected from `pos`.
+    fn sees(&self, pos: [f64; 2], id: u32) -> bool;
+    /// Every landmark detected from `pos`, sorted.
+    fn visible(&self, pos: [f64; 2]) -> Vec<u32>;
+    /// The sensor range.
+    fn range(&self) -> f64;
+}
+
+/// Point landmarks detected within a range (no occlusion).
+#[derive(Debug, Clone)]
+pub struct RangePerception {
+    ids: Vec<u32>,
+    pos: Vec<[f64; 2]>,
+    index: HashMap<u32, usize>,
+    range: f64,
+}
+
+impl RangePerception {
+    /// Landmarks `(id, position)` seen within `range`.
+    #[must_use]
+    pub fn new(landmarks: &[(u32, [f64; 2])], range: f64) -> Self {
+        let mut sorted = landmarks.to_vec();
+        sorted.sort_by_key(|l| l.0);
+        Self {
+            index: sorted.iter().enumerate().map(|(i, l)| (l.0, i)).collect(),
+            ids: sorted.iter().map(|l| l.0).collect(),
+            pos: sorted.iter().map(|l| l.1).collect(),
+            range,
+        }
+    }
+}
+
+pub(crate) fn d(a: [f64; 2], b: [f64; 2]) -> f64 {
+    (a[0] - b[0]).hypot(a[1] - b[1])
+}
+
+impl Perception for RangePerception {
+    fn position(&self, id: u32) -> Option<[f64; 2]> {
+        self.index.get(&id).map(|&i| self.pos[i])
+    }
+    fn sees(&self, pos: [f64; 2], id: u32) -> bool {
+        self.index
+            .get(&id)
+            .is_some_and(|&i| d(pos, self.pos[i]) <= self.range)
+    }
+    fn visible(&self, pos: [f64; 2]) -> Vec<u32> {
+        self.ids
+            .iter()
+            .zip(&self.pos)
+            .filter(|(_, p)| d(pos, **p) <= self.range)
+            .map(|(id, _)| *id)
+            .collect()
+    }
+    fn range(&self) -> f64 {
+        self.range
+    }
+}
+
+/// Landmarks of a sim2d world, detected within range only when fully visible (§4.4.1).
+#[derive(Debug)]
+pub struct WorldPerception<'w> {
+    world: &'w sim2d::World,
+    index: HashMap<u32, usize>,
+    range: f64,
+}
+
+impl<'w> WorldPerception<'w> {
+    /// Perception in `world` with `range`.
+    #[must_use]
+    pub fn new(world: &'w sim2d::World, range: f64) -> Self {
+        Self {
+            index: world
+                .spec()
+                .landmarks
+                .iter()
+                .enumerate()
+                .map(|(i, l)| (l.id, i))
+                .collect(),
+            world,
+            range,
+        }
+    }
+}
+
+impl Perception for WorldPerception<'_> {
+    fn position(&self, id: u32) -> Option<[f64; 2]> {
+        self.index
+            .get(&id)
+            .map(|&i| self.world.spec().landmarks[i].pos)
+    }
+    fn sees(&self, pos: [f64; 2], id: u32) -> bool {
+        self.index.get(&id).is_some_and(|&i| {
+            d(pos, self.world.spec().landmarks[i].pos) <= self.range
+                && self.world.is_fully_visible(pos, i)
+        })
+    }
+    fn visible(&self, pos: [f64; 2]) -> Vec<u32> {
+        let mut out: Vec<u32> = self
+            .world
+            .spec()
+            .landmarks
+            .iter()
+            .enumerate()
+            .filter(|(i, l)| d(pos, l.pos) <= self.range && self.world.is_fully_visible(pos, *i))
+            .map(|(_, l)| l.id)
+            .collect();
+        out.sort_unstable();
+        out
+    }
+    fn range(&self) -> f64 {
+        self.range
+    }
+}

@@ -1,0 +1,316 @@
+//! The navigator behaves as the thesis's robot (§4.3–4.4.1), not an idealised one — each test
+//! pins a defect of issue 18 and shows the idealised option it replaced still does the old
+//! thing (so the test could fail).
+#![allow(clippy::unwrap_used)]
+
+use std::collections::{BTreeMap, HashMap};
+use std::sync::Mutex;
+use std::sync::atomic::{AtomicUsize, Ordering};
+
+use qlink::{
+    Arrival, Controller, ControllerKind, Layer, LinkGraph, NavConfig, NavOutcome, Navigator,
+    Odometry, Perception, QualitativeMap, RangePerception, References, SearchPomdp,
+};
+use qsr_core::Calculus;
+
+fn random_world(seed: u64, n: u32, side: f64) -> BTreeMap<u32, [f64; 2]> {
+    use rand::{RngExt, SeedableRng};
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+    (0..n)
+        .map(|i| {
+            (
+                i,
+                [rng.random_range(0.0..side), rng.random_range(0.0..side)],
+            )
+        })
+        .collect()
+}
+
+fn exact_map(positions: &BTreeMap<u32, [f64; 2]>, range: f64) -> QualitativeMap {
+    let layer =
+        Layer::exact_from_positions(Calculus::builtin("quadrant").unwrap(), positions, range)
+            .unwrap();
+    QualitativeMap::new(vec![layer]).unwrap()
+}
+
+fn thesis(radius: f64) -> NavConfig {
+    let quadrant = Calculus::builtin("quadrant").unwrap();
+    NavConfig::thesis(
+        Controller::new(ControllerKind::Arc, radius),
+        SearchPomdp::new(&quadrant, false, 1.0, 0.9, 4).unwrap(),
+    )
+}
+
+/// Range perception that counts the positions read for a landmark whose last detection
+/// query said "not seen": a robot reading those uses what it cannot perceive.
+struct Spy {
+    inner: RangePerception,
+    seen: Mutex<HashMap<u32, bool>>,
+    blind_reads: AtomicUsize,
+}
+
+impl Spy {
+    fn new(landmarks: &[(u32, [f64; 2])], range: f64) -> Self {
+        Self {
+            inner: RangePerception::new(landmarks, range),
+            seen: Mutex::new(HashMap::new()),
+            blind_reads: AtomicUsize::new(0),
+        }
+    }
+}
+
+impl Perception for Spy {
+    fn position(&self, id: u32) -> Option<[f64; 2]> {
+        if !self.seen.lock().unwrap().get(&id).copied().unwrap_or(false) {
+            self.blind_reads.fetch_add(1, Ordering::Relaxed);
+        }
+        self.inner.position(id)
+    }
+    fn sees(&self, pos: [f64; 2], id: u32) -> bool {
+        let s = self.inner.sees(pos, id);
+        self.seen.lock().unwrap().insert(id, s);
+        s
+    }
+    fn visible(&self, pos: [f64; 2]) -> Vec<u32> {
+        let v = self.inner.visible(pos);
+        let mut seen = self.seen.lock().unwrap();
+        for s in seen.values_mut() {
+            *s = false;
+        }
+        for &id in &v {
+            seen.insert(id, true);
+        }
+        v
+    }
+    fn range(&self) -> f64 {
+        self.inner.range()
+    }
+}
+
+/// Navigations between landmark pairs of a random world mapped with range `map_range` and
+/// driven with sensor range `sensor` (starts 0.5 m beside the start landmark, as the study).
+fn runs(
+    positions: &BTreeMap<u32, [f64; 2]>,
+    map: &QualitativeMap,
+    perception: &dyn Fn(&NavConfig, [f64; 2], u32) -> NavOutcome,
+    cfg: &NavConfig,
+) -> Vec<(u32, NavOutcome)> {
+    let mut out = Vec::new();
+    for (&s, &ps) in positions {
+        for &t in positions.keys().step_by(3) {
+            if s == t || map.elements_with(s).is_empty() || map.elements_with(t).is_empty() {
+                continue;
+            }
+            out.push((t, perception(cfg, [ps[0] + 0.5, ps[1]], t)));
+        }
+    }
+    out
+}
+
+#[test]
+fn unseen_references_are_placed_where_last_seen_not_where_they_truly_are() {
+    // issue 18 §1: the navigator read the true positions of references it did not see
+    let positions = random_world(3, 30, 70.0);
+    let map = exact_map(&positions, 15.0);
+    let graph = LinkGraph::new(&map, 1, |_, _, _| 1.0).unwrap();
+    let list: Vec<(u32, [f64; 2])> = positions.clone().into_iter().collect();
+    let blind = |references: References| {
+        let spy = Spy::new(&list, 0.8 * 15.0);
+        let cfg = NavConfig {
+            references,
+            ..thesis(15.0)
+        };
+        let nav = Navigator::new(&map, &graph, &spy, &cfg).unwrap();
+        let outcomes = runs(
+            &positions,
+            &map,
+            &|_, start, goal| nav.navigate(start, goal, None, false).unwrap(),
+            &cfg,
+        );
+        (
+            spy.blind_reads.load(Ordering::Relaxed),
+            outcomes.iter().filter(|o| o.1.success).count(),
+            outcomes.len(),
+        )
+    };
+    let (oracle_reads, _, n) = blind(References::Oracle);
+    assert!(n > 100, "{n} runs");
+    assert!(
+        oracle_reads > 0,
+        "the idealised robot reads unseen positions"
+    );
+    let (reads, ok, _) = blind(References::default());
+    assert_eq!(reads, 0, "the thesis's robot reads only what it sees");
+    assert!(ok > 0);
+}
+
+#[test]
+fn perfect_odometry_remembers_exactly_and_drift_changes_the_drive() {
+    // with no drift a remembered position is the true one: the idealised run is reproduced;
+    // a large drift moves the arcs planned in a remembered frame
+    let positions = random_world(5, 30, 70.0);
+    let map = exact_map(&positions, 15.0);
+    let graph = LinkGraph::new(&map, 1, |_, _, _| 1.0).unwrap();
+    let list: Vec<(u32, [f64; 2])> = positions.clone().into_iter().collect();
+    let perception = RangePerception::new(&list, 0.7 * 15.0);
+    let drive = |references: References| {
+        let cfg = NavConfig {
+            references,
+            ..thesis(15.0)
+        };
+        let nav = Navigator::new(&map, &graph, &perception, &cfg).unwrap();
+        runs(
+            &positions,
+            &map,
+            &|_, start, goal| nav.navigate(start, goal, None, false).unwrap(),
+            &cfg,
+        )
+    };
+    let oracle = drive(References::Oracle);
+    let perfect = drive(References::Perceived(Odometry::PERFECT));
+    let drifting = drive(References::Perceived(Odometry {
+        scale_error: 0.3,
+        heading_error: 0.3,
+    }));
+    let lengths = |v: &[(u32, NavOutcome)]| v.iter().map(|o| o.1.length).collect::<Vec<_>>();
+    assert_eq!(lengths(&oracle), lengths(&perfect));
+    assert_ne!(lengths(&perfect), lengths(&drifting));
+}
+
+#[test]
+fn the_study_drives_arcs_of_the_mapping_range_not_the_sensor_range() {
+    // issue 18 §2: the study gave the controller the sensor range R' under test
+    use qlink::study::{ArcRadius, MAP_RANGE, Setting, StudyConfig};
+    let config = StudyConfig::quick(0);
+    for value in [1.0, 0.8, 0.6] {
+        let setting = Setting {
+            trial: "sensor-range".into(),
+            value,
+            schedule: config.schedule,
+            pairs: None,
+        };
+        let nav = config.nav_config(&setting).unwrap();
+        assert_eq!(nav.controller.radius, MAP_RANGE, "R' = {value} R");
+        let idealised = StudyConfig {
+            radius: ArcRadius::SensorRange,
+            ..config.clone()
+        };
+        let nav = idealised.nav_config(&setting).unwrap();
+        assert!((nav.controller.radius - value * MAP_RANGE).abs() < 1e-12);
+        assert!(!idealised.idealised().is_empty() && config.idealised().is_empty());
+    }
+}
+
+#[test]
+fn a_circle_about_one_landmark_keeps_it_in_view() {
+    // the robot sees only landmark 0 and circles it to localise: at R when its sensor
+    // reaches R, at R' when it is shorter (a circle that loses its centre searches nothing)
+    let positions: BTreeMap<u32, [f64; 2]> =
+        [(0, [0.0, 0.0]), (1, [12.0, 0.0]), (2, [6.0, 9.0])].into();
+    let map = exact_map(&positions, 15.0);
+    let graph = LinkGraph::new(&map, 1, |_, _, _| 1.0).unwrap();
+    let list: Vec<(u32, [f64; 2])> = positions.clone().into_iter().collect();
+    for (sensor, radius, expect) in [(6.0, 10.0, 6.0), (11.0, 10.0, 10.0)] {
+        let perception = RangePerception::new(&list, sensor);
+        let cfg = thesis(radius);
+        let nav = Navigator::new(&map, &graph, &perception, &cfg).unwrap();
+        let out = nav.navigate([-5.0, 0.0], 2, None, true).unwrap();
+        let farthest = out
+            .trajectory
+            .iter()
+            .map(|p| p[0].hypot(p[1]))
+            .fold(0.0, f64::max);
+        assert!(
+            farthest > expect - 0.1 && farthest <= expect + 1e-6,
+            "sensor {sensor}, R {radius}: circled at {farthest} m"
+        );
+    }
+}
+
+#[test]
+fn a_transition_needs_the_next_frames_references_not_any_two_landmarks() {
+    // issue 18 §3: a transition completed when any two landmarks of M_j were seen; the
+    // thesis asks for M_j's reference landmarks — the two that frame the next search
+    let positions = random_world(11, 40, 80.0);
+    let map = exact_map(&positions, 15.0);
+    let graph = LinkGraph::new(&map, 1, |_, _, _| 1.0).unwrap();
+    let list: Vec<(u32, [f64; 2])> = positions.clone().into_iter().collect();
+    let perception = RangePerception::new(&list, 15.0);
+    let violations = |arrival: Arrival| {
+        let cfg = NavConfig {
+            arrival,
+            ..thesis(15.0)
+        };
+        let nav = Navigator::new(&map, &graph, &perception, &cfg).unwrap();
+        let outcomes = runs(
+            &positions,
+            &map,
+            &|_, start, goal| nav.navigate(start, goal, None, false).unwrap(),
+            &cfg,
+        );
+        let mut checked = 0;
+        let mut bad = 0;
+        for (goal, o) in &outcomes {
+            for (k, rec) in o.transitions.iter().enumerate() {
+                if !rec.success {
+                    continue;
+                }
+                // what frames the next step: the next transition's link, or the goal
+                let framed = o.transitions.get(k + 1).map_or(*goal, |n| n.link);
+                let refs: Vec<u32> = map.elements()[rec.to]
+                    .landmarks
+                    .iter()
+                    .copied()
+                    .filter(|&l| l != framed)
+                    .collect();
+                if refs.len() != 2 {
+                    continue;
+                }
+                checked += 1;
+                if !refs.iter().all(|&l| perception.sees(rec.end, l)) {
+                    bad += 1;
+                }
+            }
+        }
+        (checked, bad)
+    };
+    let (checked, bad) = violations(Arrival::AnyTwo);
+    assert!(checked > 100 && bad > 0, "{bad} of {checked}");
+    let (checked, bad) = violations(Arrival::References);
+    assert!(checked > 100, "{checked}");
+    assert_eq!(
+        bad, 0,
+        "{bad} of {checked} transitions ended without M_j's references"
+    );
+}
+
+#[test]
+fn the_occlusion_study_can_fail() {
+    // issue 18 §3: 0 failures in 159,200 occlusion runs — sensing every metre with a full
+    // fallback circle always found a clear sight line. Sensing only at arc ends and circle
+    // stops, without the fallback, it fails; the schedule is a study parameter.
+    use qlink::study::{Schedule, StudyConfig, run_study, table};
+    let config = StudyConfig {
+        trial: "occlusion".into(),
+        sizes: vec![0.7],
+        pairs: Some(120),
+        samples: 40,
+        schedule: Schedule {
+            sensing: qlink::Sensing::AtStops { degrees: 30.0 },
+            fallbacks: 0,
+        },
+        occlusion_schedules: vec![Schedule::CONTINUOUS],
+        schedule_pairs: Some(120),
+        ..StudyConfig::quick(2)
+    };
+    let (records, _) = run_study(&config, &|_| {}, &|| {}).unwrap();
+    let rows = table(&records);
+    assert_eq!(rows.len(), 2);
+    let sparse = &rows[0];
+    let dense = &rows[1];
+    assert!(sparse.failures > 0, "{sparse:?}");
+    assert!(
+        sparse.failure_rate > dense.failure_rate,
+        "{sparse:?} vs {dense:?}"
+    );
+}
