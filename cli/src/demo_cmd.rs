@@ -6,7 +6,7 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use anyhow::{Context, Result, bail};
+use anyhow::{Result, bail};
 use pqrm::{LandmarkId, Observation, Pqrm, PqrmConfig, Scan};
 use qlink::{
     Controller, ControllerKind, Layer, LinkGraph, NavConfig, Navigator, QualitativeMap,
@@ -26,11 +26,12 @@ pub struct DemoArgs {
     /// Seed of the world, the sensors and the sampler.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
-    /// Goal landmark (default: the nearest mapped landmark that needs a transition).
+    /// Goal landmark (default: the one whose plan is the longest that succeeds; see
+    /// `run_rule` in summary.json).
     #[arg(long)]
     pub goal: Option<u32>,
-    /// Sensor range of the navigating robot (m); the mapping robot's lidar reaches 60 m, a
-    /// shorter range makes the navigation use more map elements.
+    /// Sensor range R' of the navigating robot (m); the mapping robot's lidar reaches
+    /// R = 30 m, and arcs and search circles run at R as in the thesis.
     #[arg(long, default_value_t = 30.0)]
     pub nav_range: f64,
     /// Output directory.
@@ -47,6 +48,9 @@ const BELIEFS_SCHEMA: &str = r#"{"title": "qrm.MapBeliefs", "description": "PQRM
 const CONTROLLER_SCHEMA: &str = r#"{"title": "qrm.ControllerState", "description": "One Q-Link transition: the link searched for, the POMDP commands (target states) and the outcome", "type": "object",
  "properties": {"timestamp": {"type": "object"}, "from": {"type": "integer"}, "to": {"type": "integer"}, "link": {"type": "integer"},
   "commands": {"type": "array"}, "success": {"type": "boolean"}, "length": {"type": "number"}}}"#;
+
+const ENTROPY_SCHEMA: &str = r#"{"title": "qrm.MapEntropy", "description": "Mean PQRM belief entropy over the map's triplets after a scan (nats, eq. 2.11)", "type": "object",
+ "properties": {"timestamp": {"type": "object"}, "mean_entropy": {"type": "number"}, "triplets": {"type": "integer"}}}"#;
 
 /// Runs the demo.
 pub fn run(a: DemoArgs) -> Result<()> {
@@ -95,8 +99,13 @@ pub fn run(a: DemoArgs) -> Result<()> {
         ..PqrmConfig::default()
     };
     let mut flip = Pqrm::new(Calculus::builtin("left-right")?, config)?;
+    // mean belief entropy after each scan (eq. 2.11), for the log's entropy plot
+    let mut entropy: Vec<(f64, f64, usize)> = Vec::with_capacity(scans.len());
     for s in &scans {
         flip.update(s)?;
+        if let Some(h) = flip.mean_entropy() {
+            entropy.push((s.t, h, flip.len()));
+        }
     }
     // 3. SERGE learns a calculus from the triplets the robot saw
     let t1 = Instant::now();
@@ -159,117 +168,89 @@ pub fn run(a: DemoArgs) -> Result<()> {
         .map(|l| SearchPomdp::new(l.calculus(), true, 0.9, 0.9, 4))
         .collect::<std::result::Result<_, _>>()?;
     let cost = qlink::graph::pomdp_cost(&map, &pomdps, qlink::CostModel::NegLogSuccess);
-    let graph = LinkGraph::new(&map, 1, cost)?;
+    let graph = LinkGraph::new(&map, BETA, cost)?;
     if a.nav_range.is_nan() || a.nav_range <= 0.0 {
         bail!("--nav-range must be positive");
     }
+    // R: the range the map was made with (the lidar's); the robot drives arcs and circles
+    // of R and senses with R' (thesis §4.4.1)
+    let map_range = sc.lidar.max_range;
     let range = a.nav_range;
     let nav_config = NavConfig {
         replan: true,
         max_replans: 3,
-        map_range: sc.detector.range,
+        map_range,
         find_goal: true,
         ..NavConfig::thesis(
-            Controller::new(ControllerKind::MidpointSweep, range),
+            Controller::new(ControllerKind::MidpointSweep, map_range),
             pomdps[0].clone(),
         )
     };
     let perception = WorldPerception::new(&sc.world, range);
-    // start and goal: along the mapping drive (every frame that recognised three landmarks
-    // at once, in order), the first start from which some reachable landmark needs at least
-    // one transition — the nearest such landmark is the goal (a short run; `--goal` picks another). (From the corridor entrance
-    // the posts and bollards frame elements holding almost every landmark.)
-    let plan_len = |starts: &[usize], l: u32| {
-        graph
-            .plan(&map, starts, l, &Default::default())
-            .ok()
-            .map(|p| p.len())
-    };
-    let pos_of = |id: u32| {
-        sc.world
-            .spec()
-            .landmarks
-            .iter()
-            .find(|l| l.id == id)
-            .map(|l| l.pos)
-    };
-    let mut choice: Option<([f64; 2], u32)> = None;
-    for f in frames.iter().filter(|f| f.detections.len() >= 3) {
-        let start = [f.pose.x, f.pose.y];
-        let starts = map.elements_in_view(&qlink::Perception::visible(&perception, start));
-        if starts.is_empty() {
-            continue;
-        }
-        let goal = match a.goal {
-            Some(g) => plan_len(&starts, g).is_some_and(|n| n >= 1).then_some(g),
-            None => map
-                .landmarks()
-                .into_iter()
-                .filter(|&l| plan_len(&starts, l).is_some_and(|n| n >= 1))
-                .filter_map(|l| {
-                    let p = pos_of(l)?;
-                    Some((l, (p[0] - start[0]).hypot(p[1] - start[1])))
-                })
-                .min_by(|x, y| x.1.total_cmp(&y.1).then(x.0.cmp(&y.0)))
-                .map(|x| x.0),
-        };
-        if let Some(g) = goal {
-            choice = Some((start, g));
-            break;
-        }
-    }
-    let (start, goal) = match (choice, a.goal) {
-        (Some(c), _) => c,
-        // nothing needs a transition: start where the drive began, any goal
-        (None, g) => (
-            [sc.start.x, sc.start.y],
-            g.or_else(|| map.landmarks().last().copied())
-                .context("no landmark in the map")?,
-        ),
-    };
     let t2 = Instant::now();
-    let nav = Navigator::new(&map, &graph, &perception, &nav_config)?;
-    let outcome = nav.navigate(start, goal, None, true)?;
+    let chosen = choose_run(&map, &graph, &perception, &nav_config, &frames, a.goal)?;
+    let (start, goal, outcome) = (chosen.start, chosen.goal, chosen.outcome.clone());
     let t_nav = t2.elapsed().as_secs_f64();
+    let pos_of = |id: u32| qlink::Perception::position(&perception, id);
     // 5. outputs
     // Written into a staging directory, moved into place only when all is done: a
     // failure or Ctrl-C leaves nothing a user could take for a result.
     let stage = Staging::new(&a.out)?;
     let out_dir = stage.path().to_path_buf();
     let t_end_map = frames.last().map_or(0.0, |f| f.t);
-    write_log(&out_dir, &sc, &frames, &map, &outcome, goal, t_end_map)?;
+    write_log(
+        &out_dir, &sc, &frames, &map, &entropy, &outcome, goal, t_end_map,
+    )?;
     if let Some(c) = &learned {
         write_atomic(
             &out_dir.join("learned_calculus.json"),
             c.spec().to_json_string()?.as_bytes(),
         )?;
     }
-    let traj: Vec<(f64, f64)> = outcome.trajectory.iter().map(|p| (p[0], p[1])).collect();
-    // the plan's skeleton: start → each link landmark searched for → goal landmark
-    let mut chain: Vec<[f64; 2]> = vec![start];
-    chain.extend(
-        outcome
-            .transitions
-            .iter()
-            .filter(|t| t.success)
-            .filter_map(|t| pos_of(t.link)),
-    );
-    chain.extend(pos_of(goal));
-    let links: Vec<crate::plot::Segment> = chain
-        .windows(2)
-        .map(|w| ((w[0][0], w[0][1]), (w[1][0], w[1][1])))
+    let drive: Vec<[f64; 2]> = frames.iter().map(|f| [f.pose.x, f.pose.y]).collect();
+    let plan: Vec<[[f64; 2]; 3]> = outcome
+        .plan
+        .iter()
+        .filter_map(|&e| {
+            let [x, y, z] = map.elements()[e].landmarks;
+            Some([pos_of(x)?, pos_of(y)?, pos_of(z)?])
+        })
         .collect();
-    crate::plot::scenario_map(
+    let links: Vec<[f64; 2]> = outcome
+        .transitions
+        .iter()
+        .filter(|t| t.success)
+        .filter_map(|t| pos_of(t.link))
+        .collect();
+    let regions = learned.as_ref().map(regions_of);
+    let verdict = if outcome.success {
+        "reached"
+    } else {
+        "not reached"
+    };
+    crate::plot::demo_picture(
         &out_dir.join("demo"),
-        &format!(
-            "Q-Link to landmark {goal}: {} ({} transitions, {:.0} m)",
-            if outcome.success { "reached" } else { "failed" },
-            outcome.transitions.len(),
-            outcome.length
-        ),
-        sc.world.spec(),
-        &traj,
-        &links,
+        &crate::plot::DemoPicture {
+            title: format!(
+                "Q-Link to landmark {goal}: {verdict}, |P| = {}, {:.0} m",
+                outcome.plan_len, outcome.length
+            ),
+            world: sc.world.spec(),
+            drive: &drive,
+            trajectory: &outcome.trajectory,
+            searches: &outcome.searches,
+            plan: &plan,
+            links: &links,
+            start,
+            goal: pos_of(goal).unwrap_or(start),
+            regions: match (&learned, &regions) {
+                (Some(c), Some(r)) => Some((
+                    format!("Learned calculus: {} regions of A→B", c.n_states()),
+                    r.picture(),
+                )),
+                _ => None,
+            },
+        },
     )?;
     let summary = json!({
         "seed": a.seed,
@@ -278,13 +259,22 @@ pub fn run(a: DemoArgs) -> Result<()> {
         "recognised_landmarks": assoc.len(),
         "map_elements": map.elements().len(),
         "link_graph_edges": graph.n_edges(),
+        "beta": BETA,
         "learned_calculus_states": learned.as_ref().map(Calculus::n_states),
+        "run_rule": RUN_RULE,
+        "runs_tried": chosen.tried,
+        "pairs_with_a_plan": chosen.candidates,
+        "start": start,
         "goal": goal,
         "success": outcome.success,
         "failure": outcome.failure,
         "plan_len": outcome.plan_len,
+        "plan": outcome.plan,
         "replans": outcome.replans,
+        "map_range": map_range,
+        "sensor_range": range,
         "trajectory_length": outcome.length,
+        "transit_length": outcome.transit_length,
         "prop2_bound": outcome.bound,
         "prop4_bound": outcome.bound_direct,
         "transitions": outcome.transitions,
@@ -294,34 +284,30 @@ pub fn run(a: DemoArgs) -> Result<()> {
         &out_dir.join("summary.json"),
         serde_json::to_string_pretty(&summary)?.as_bytes(),
     )?;
-    outln!("qrm demo (seed {}):", a.seed)?;
     outln!(
-        "  mapped the field site with the lidar: {} frames, {} landmarks recognised, {} map elements",
+        "qrm demo (seed {}): mapped the field site by lidar alone ({} scans, {} landmarks, {} map elements){}.",
+        a.seed,
         frames.len(),
         assoc.len(),
-        map.elements().len()
+        map.elements().len(),
+        learned.as_ref().map_or(String::new(), |c| format!(
+            "; SERGE learned a {}-state calculus",
+            c.n_states()
+        ))
     )?;
-    if let Some(c) = &learned {
-        outln!(
-            "  SERGE learned a calculus with {} states from {} triplets ({t_serge:.1} s)",
-            c.n_states(),
-            triplets.len()
-        )?;
-    }
     outln!(
-        "  Q-Link to landmark {goal}: {} — |P| = {}, {} re-plans, {:.1} m driven (Prop. 2 bound {:.0} m)",
-        if outcome.success {
-            "reached"
-        } else {
-            "not reached"
-        },
+        "Q-Link to landmark {goal} with nothing but the qualitative map: {verdict}, {} \
+         transitions planned, {} re-plan(s), {:.0} m driven (Prop. 2 bound {:.0} m); picked as \
+         the longest plan that succeeds ({} run(s) tried).",
         outcome.plan_len,
         outcome.replans,
         outcome.length,
-        outcome.bound
+        outcome.bound,
+        chosen.tried
     )?;
     outln!(
-        "  wrote {} (open run.mcap in Foxglove) in {:.1} s",
+        "Wrote {} in {:.1} s: demo.png (the run), run.mcap (Foxglove; layout \
+         docs/foxglove/qrm-layout.json), summary.json.",
         a.out.display(),
         t0.elapsed().as_secs_f64()
     )?;
@@ -329,11 +315,13 @@ pub fn run(a: DemoArgs) -> Result<()> {
     Ok(())
 }
 
+#[allow(clippy::too_many_arguments)]
 fn write_log(
     out_dir: &Path,
     sc: &sim2d::Scenario,
     frames: &[sim2d::Frame],
     map: &QualitativeMap,
+    entropy: &[(f64, f64, usize)],
     outcome: &qlink::NavOutcome,
     goal: u32,
     t_map: f64,
@@ -347,7 +335,15 @@ fn write_log(
         "qrm.ControllerState",
         Some(CONTROLLER_SCHEMA),
     )?;
+    log.add_channel("/map/entropy", "qrm.MapEntropy", Some(ENTROPY_SCHEMA))?;
     crate::sim_cmd::write_world(&mut log, sc)?;
+    for &(t, h, n) in entropy {
+        log.write(
+            "/map/entropy",
+            t,
+            &json!({"timestamp": stamp(t), "mean_entropy": h, "triplets": n}),
+        )?;
+    }
     for f in frames {
         crate::sim_cmd::write_frame(&mut log, f)?;
     }
@@ -506,4 +502,162 @@ fn write_log(
         &json!({"timestamp": stamp(t), "level": 2, "message": format!("navigation to landmark {goal}: {}", if outcome.success { "reached" } else { "failed" }), "name": "qrm demo", "file": "", "line": 0}),
     )?;
     Ok(log.finish()?)
+}
+
+/// Landmarks two map elements share for a link: 2, as in the thesis's field experiment
+/// (§4.4.2) — with one, elements spanning the site link far-apart places in one step.
+const BETA: usize = 2;
+
+/// Most navigations the demo tries before it shows the longest run it made.
+const MAX_TRIES: usize = 24;
+
+/// Poses of the mapping drive considered as starts: every this many frames that saw three
+/// landmarks.
+const START_EVERY: usize = 10;
+
+/// The rule the demo picks its run by (printed in `summary.json`).
+const RUN_RULE: &str = "starts: every 10th pose of the mapping drive that saw three landmarks; \
+goals: every mapped landmark out of view there; pairs tried longest plan first (ties: the \
+farthest goal), the first run that reaches its goal is shown (at most 24 runs, else the longest plan's run)";
+
+/// The run the demo shows.
+struct Chosen {
+    start: [f64; 2],
+    goal: u32,
+    outcome: qlink::NavOutcome,
+    /// Navigations run to find it.
+    tried: usize,
+    /// Start/goal pairs with a plan.
+    candidates: usize,
+}
+
+/// Picks the run by [`RUN_RULE`]: the longest plan that succeeds for the seed. With
+/// `goal`, only that goal is considered.
+fn choose_run(
+    map: &QualitativeMap,
+    graph: &LinkGraph,
+    perception: &WorldPerception<'_>,
+    config: &NavConfig,
+    frames: &[sim2d::Frame],
+    goal: Option<u32>,
+) -> Result<Chosen> {
+    let landmarks = map.landmarks();
+    let mut pairs: Vec<(usize, f64, [f64; 2], u32)> = Vec::new();
+    for f in frames
+        .iter()
+        .filter(|f| f.detections.len() >= 3)
+        .step_by(START_EVERY)
+    {
+        let start = [f.pose.x, f.pose.y];
+        let visible = qlink::Perception::visible(perception, start);
+        let starts = map.elements_in_view(&visible);
+        if starts.is_empty() {
+            continue;
+        }
+        for &l in &landmarks {
+            if goal.is_some_and(|g| g != l) || visible.contains(&l) {
+                continue;
+            }
+            let Ok(plan) = graph.plan(map, &starts, l, &Default::default()) else {
+                continue;
+            };
+            let Some(p) = qlink::Perception::position(perception, l) else {
+                continue;
+            };
+            pairs.push((
+                plan.len(),
+                (p[0] - start[0]).hypot(p[1] - start[1]),
+                start,
+                l,
+            ));
+        }
+    }
+    pairs.sort_by(|x, y| {
+        y.0.cmp(&x.0)
+            .then(y.1.total_cmp(&x.1))
+            .then(x.3.cmp(&y.3))
+            .then(x.2[0].total_cmp(&y.2[0]))
+            .then(x.2[1].total_cmp(&y.2[1]))
+    });
+    let candidates = pairs.len();
+    let nav = Navigator::new(map, graph, perception, config)?;
+    let mut first: Option<Chosen> = None;
+    for (k, &(_, _, start, l)) in pairs.iter().take(MAX_TRIES).enumerate() {
+        let outcome = nav.navigate(start, l, None, true)?;
+        let run = Chosen {
+            start,
+            goal: l,
+            outcome,
+            tried: k + 1,
+            candidates,
+        };
+        if run.outcome.success {
+            return Ok(run);
+        }
+        first.get_or_insert(run);
+    }
+    match first {
+        Some(mut run) => {
+            run.tried = MAX_TRIES.min(candidates);
+            Ok(run)
+        }
+        None => match goal {
+            Some(g) => bail!("no pose of the mapping drive has a plan to landmark {g}"),
+            None => bail!("no start/goal pair along the mapping drive has a plan"),
+        },
+    }
+}
+
+/// A calculus's regions on a grid over its normalised frame (A = (0, 0), B = (1, 0)).
+struct Regions {
+    window: [f64; 4],
+    nx: usize,
+    ny: usize,
+    cells: Vec<u32>,
+    marks: Vec<([f64; 2], String)>,
+}
+
+impl Regions {
+    fn picture(&self) -> crate::plot::RegionPicture<'_> {
+        crate::plot::RegionPicture {
+            window: self.window,
+            nx: self.nx,
+            ny: self.ny,
+            cell_region: &self.cells,
+            points: &[],
+            highlight: &[],
+            shade: None,
+            marks: &self.marks,
+            numbers: true,
+        }
+    }
+}
+
+fn regions_of(c: &Calculus) -> Regions {
+    let window = match c.partition() {
+        qsr_core::Partition::Raster(r) => r.window(),
+        qsr_core::Partition::Constraints(_) => [-2.2, 2.2, -1.6, 2.6],
+    };
+    let [x0, x1, y0, y1] = window;
+    let nx = 160;
+    let cell = (x1 - x0) / nx as f64;
+    let ny = ((y1 - y0) / cell).ceil() as usize;
+    let cells = (0..ny)
+        .flat_map(|j| {
+            (0..nx).map(move |i| {
+                let p = qsr_core::Point2::new(
+                    x0 + (i as f64 + 0.5) * cell,
+                    y0 + (j as f64 + 0.5) * cell,
+                );
+                u32::from(c.classify_normalised(&p).0)
+            })
+        })
+        .collect();
+    Regions {
+        window: [x0, x1, y0, y0 + ny as f64 * cell],
+        nx,
+        ny,
+        cells,
+        marks: vec![([0.0, 0.0], "A".into()), ([1.0, 0.0], "B".into())],
+    }
 }

@@ -75,11 +75,21 @@ fn both(
     draw: impl Fn(&DrawingArea<SVGBackend<'_>, Shift>) -> Drawn,
     draw_png: impl Fn(&DrawingArea<BitMapBackend<'_>, Shift>) -> Drawn,
 ) -> Result<Vec<PathBuf>> {
+    both_sized(stem, SIZE, draw, draw_png)
+}
+
+/// [`both`] on a canvas of `size` pixels.
+fn both_sized(
+    stem: &Path,
+    size: (u32, u32),
+    draw: impl Fn(&DrawingArea<SVGBackend<'_>, Shift>) -> Drawn,
+    draw_png: impl Fn(&DrawingArea<BitMapBackend<'_>, Shift>) -> Drawn,
+) -> Result<Vec<PathBuf>> {
     qsr_core::register_font();
     let svg_path = stem.with_extension("svg");
     let mut svg = String::new();
     {
-        let root = SVGBackend::with_string(&mut svg, SIZE).into_drawing_area();
+        let root = SVGBackend::with_string(&mut svg, size).into_drawing_area();
         draw(&root).map_err(|e| anyhow::anyhow!("drawing {}: {e}", svg_path.display()))?;
         root.present()
             .map_err(|e| anyhow::anyhow!("drawing {}: {e}", svg_path.display()))?;
@@ -93,7 +103,7 @@ fn both(
         .into_owned();
     let tmp = png_path.with_file_name(format!(".{name}.tmp.png"));
     {
-        let root = BitMapBackend::new(&tmp, SIZE).into_drawing_area();
+        let root = BitMapBackend::new(&tmp, size).into_drawing_area();
         draw_png(&root).map_err(|e| anyhow::anyhow!("drawing {}: {e}", png_path.display()))?;
         root.present()
             .map_err(|e| anyhow::anyhow!("writing {}: {e}", png_path.display()))?;
@@ -416,7 +426,9 @@ where
 {
     let [x0, x1, y0, y1] = w.bounds;
     let (dx, dy) = (x1 - x0, y1 - y0);
-    let aspect = f64::from(SIZE.0 - 60) / f64::from(SIZE.1 - 60);
+    let (w_px, h_px) = root.dim_in_pixel();
+    let aspect =
+        f64::from(w_px.saturating_sub(60).max(1)) / f64::from(h_px.saturating_sub(60).max(1));
     let (cx, cy) = ((x0 + x1) / 2.0, (y0 + y1) / 2.0);
     let (hx, hy) = if dx / dy > aspect {
         (dx / 2.0, dx / aspect / 2.0)
@@ -450,7 +462,7 @@ where
         .y_desc("y (m)")
         .light_line_style(WHITE)
         .draw()?;
-    let px_per_m = f64::from(SIZE.0 - 60) / (2.0 * hx);
+    let px_per_m = f64::from(root.dim_in_pixel().0.saturating_sub(60)) / (2.0 * hx);
     let disc = |r: f64| ((r * px_per_m).round() as i32).max(2);
     chart.draw_series(rays.iter().map(|(a, b)| {
         PathElement::new(
@@ -862,5 +874,187 @@ pub fn reference_pair(
         stem,
         |r| draw_reference_pair(r, title, observed, inferred),
         |r| draw_reference_pair(r, title, observed, inferred),
+    )
+}
+
+/// Okabe–Ito colours: distinguishable with every common colour-vision deficiency.
+mod okabe_ito {
+    use plotters::style::RGBColor;
+    pub const ORANGE: RGBColor = RGBColor(230, 159, 0);
+    pub const SKY_BLUE: RGBColor = RGBColor(86, 180, 233);
+    pub const BLUISH_GREEN: RGBColor = RGBColor(0, 158, 115);
+    pub const BLUE: RGBColor = RGBColor(0, 114, 178);
+    pub const VERMILLION: RGBColor = RGBColor(213, 94, 0);
+    pub const REDDISH_PURPLE: RGBColor = RGBColor(204, 121, 167);
+}
+
+/// What the demo's picture shows: the run over the world (left) and the learned calculus's
+/// regions (right).
+pub struct DemoPicture<'a> {
+    /// Title of the world panel.
+    pub title: String,
+    /// The world.
+    pub world: &'a sim2d::WorldSpec,
+    /// The mapping drive (thin, light).
+    pub drive: &'a [[f64; 2]],
+    /// The navigation's trajectory.
+    pub trajectory: &'a [[f64; 2]],
+    /// Index ranges of `trajectory` spent searching for a link (inclusive).
+    pub searches: &'a [[usize; 2]],
+    /// The first plan's elements as triangles of their landmarks' positions.
+    pub plan: &'a [[[f64; 2]; 3]],
+    /// Positions of the links the plan searched for.
+    pub links: &'a [[f64; 2]],
+    /// Start position.
+    pub start: [f64; 2],
+    /// Goal landmark position.
+    pub goal: [f64; 2],
+    /// The learned calculus's regions, with the panel's title.
+    pub regions: Option<(String, RegionPicture<'a>)>,
+}
+
+fn draw_demo<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, p: &DemoPicture<'_>) -> Drawn
+where
+    DB::ErrorType: 'static,
+{
+    use okabe_ito::{BLUE, BLUISH_GREEN, ORANGE, REDDISH_PURPLE, SKY_BLUE, VERMILLION};
+    root.fill(&WHITE)?;
+    let (w_px, _) = root.dim_in_pixel();
+    let (left, right) = if p.regions.is_some() {
+        root.split_horizontally(w_px * 64 / 100)
+    } else {
+        root.split_horizontally(w_px)
+    };
+    let w = p.world;
+    let (mut chart, hx) = world_chart(&left, &p.title, w)?;
+    chart
+        .configure_mesh()
+        .x_desc("x (m)")
+        .y_desc("y (m)")
+        .light_line_style(WHITE)
+        .draw()?;
+    let px_per_m = f64::from(left.dim_in_pixel().0.saturating_sub(60)) / (2.0 * hx);
+    let disc = |r: f64| ((r * px_per_m).round() as i32).max(2);
+    let pt = |q: &[f64; 2]| (q[0], q[1]);
+    chart.draw_series(
+        w.clutter
+            .iter()
+            .map(|c| Circle::new(pt(&c.pos), disc(c.radius), RGBColor(205, 190, 165).filled())),
+    )?;
+    chart
+        .draw_series(w.walls.iter().map(|l| {
+            PathElement::new(
+                vec![pt(&l.start), pt(&l.end)],
+                RGBColor(80, 80, 80).stroke_width(4),
+            )
+        }))?
+        .label("walls")
+        .legend(|(x, y)| {
+            PathElement::new(
+                vec![(x, y), (x + 16, y)],
+                RGBColor(80, 80, 80).stroke_width(4),
+            )
+        });
+    chart
+        .draw_series(w.landmarks.iter().map(|l| {
+            Circle::new(
+                pt(&l.pos),
+                disc(l.radius).max(3),
+                RGBColor(120, 120, 120).filled(),
+            )
+        }))?
+        .label("landmarks")
+        .legend(|(x, y)| Circle::new((x + 8, y), 3, RGBColor(120, 120, 120).filled()));
+    chart
+        .draw_series(std::iter::once(PathElement::new(
+            p.drive.iter().map(pt).collect::<Vec<_>>(),
+            SKY_BLUE.stroke_width(1),
+        )))?
+        .label("mapping drive")
+        .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 16, y)], SKY_BLUE.stroke_width(1)));
+    chart
+        .draw_series(p.plan.iter().map(|t| {
+            Polygon::new(
+                t.iter().map(pt).collect::<Vec<_>>(),
+                BLUE.mix(0.12).filled(),
+            )
+        }))?
+        .label("plan: map elements")
+        .legend(|(x, y)| Rectangle::new([(x, y - 5), (x + 16, y + 5)], BLUE.mix(0.3).filled()));
+    chart.draw_series(p.plan.iter().map(|t| {
+        let mut v: Vec<(f64, f64)> = t.iter().map(pt).collect();
+        v.push(pt(&t[0]));
+        PathElement::new(v, BLUE.stroke_width(2))
+    }))?;
+    chart
+        .draw_series(p.searches.iter().filter_map(|&[a, b]| {
+            let seg = p
+                .trajectory
+                .get(a..=b.min(p.trajectory.len().saturating_sub(1)))?;
+            Some(PathElement::new(
+                seg.iter().map(pt).collect::<Vec<_>>(),
+                ORANGE.stroke_width(4),
+            ))
+        }))?
+        .label("searching for a link (POMDP arcs, circles)")
+        .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 16, y)], ORANGE.stroke_width(4)));
+    chart
+        .draw_series(std::iter::once(PathElement::new(
+            p.trajectory.iter().map(pt).collect::<Vec<_>>(),
+            BLACK.stroke_width(1),
+        )))?
+        .label("trajectory")
+        .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 16, y)], BLACK.stroke_width(1)));
+    chart
+        .draw_series(
+            p.links
+                .iter()
+                .map(|q| TriangleMarker::new(pt(q), 7, VERMILLION.filled())),
+        )?
+        .label("links found")
+        .legend(|(x, y)| TriangleMarker::new((x + 8, y), 6, VERMILLION.filled()));
+    chart
+        .draw_series(std::iter::once(Rectangle::new(
+            [
+                (p.start[0] - 2.0, p.start[1] - 2.0),
+                (p.start[0] + 2.0, p.start[1] + 2.0),
+            ],
+            BLUISH_GREEN.filled(),
+        )))?
+        .label("start")
+        .legend(|(x, y)| Rectangle::new([(x + 3, y - 5), (x + 13, y + 5)], BLUISH_GREEN.filled()));
+    chart
+        .draw_series(std::iter::once(Circle::new(
+            pt(&p.goal),
+            8,
+            REDDISH_PURPLE.filled(),
+        )))?
+        .label("goal landmark")
+        .legend(|(x, y)| Circle::new((x + 8, y), 6, REDDISH_PURPLE.filled()));
+    chart
+        .configure_series_labels()
+        .position(SeriesLabelPosition::LowerLeft)
+        .background_style(WHITE.mix(0.85))
+        .border_style(BLACK)
+        .label_font(("sans-serif", 13))
+        .draw()?;
+    if let Some((title, regions)) = &p.regions {
+        draw_regions(&right, title, regions)?;
+    }
+    Ok(())
+}
+
+/// The demo's picture (see [`DemoPicture`]).
+pub fn demo_picture(stem: &Path, picture: &DemoPicture<'_>) -> Result<Vec<PathBuf>> {
+    let size = if picture.regions.is_some() {
+        (1240, 560)
+    } else {
+        SIZE
+    };
+    both_sized(
+        stem,
+        size,
+        |r| draw_demo(r, picture),
+        |r| draw_demo(r, picture),
     )
 }

@@ -111,17 +111,50 @@ fn the_demo_maps_learns_navigates_and_logs() {
     let out = Path::new(env!("CARGO_TARGET_TMPDIR")).join("demo");
     let _ = std::fs::remove_dir_all(&out);
     let stdout = common::ok(&["demo", "--out", out.to_str().unwrap()], "");
-    assert!(stdout.contains("SERGE learned a calculus"), "{stdout}");
+    assert!(stdout.contains("SERGE learned a"), "{stdout}");
     assert!(stdout.contains("reached"), "{stdout}");
     let summary: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
     assert_eq!(summary["success"], true);
+    // issue 18: the demo crosses the site — several transitions, not the nearest landmark
+    let plan_len = summary["plan_len"].as_u64().unwrap();
+    assert!(plan_len >= 3, "|P| = {plan_len}: {stdout}");
+    assert_eq!(
+        summary["plan"].as_array().unwrap().len() as u64,
+        plan_len + 1
+    );
+    assert!(
+        summary["run_rule"]
+            .as_str()
+            .unwrap()
+            .contains("longest plan")
+    );
     assert!(
         summary["trajectory_length"].as_f64().unwrap() <= summary["prop2_bound"].as_f64().unwrap()
     );
+    // the terminal summary is short and says where the files are
+    assert!(stdout.lines().count() <= 3, "{stdout}");
+    assert!(
+        stdout.contains("demo.png") && stdout.contains("run.mcap"),
+        "{stdout}"
+    );
+    assert!(summary["seconds"]["total"].as_f64().unwrap() < 30.0);
     for f in ["run.mcap", "demo.svg", "demo.png", "learned_calculus.json"] {
         assert!(out.join(f).is_file(), "{f}");
     }
+    // the picture has a legend naming what it draws, and the learned calculus's panel
+    let svg = std::fs::read_to_string(out.join("demo.svg")).unwrap();
+    for label in [
+        "start",
+        "goal landmark",
+        "plan: map elements",
+        "searching for a link",
+        "trajectory",
+        "Learned calculus",
+    ] {
+        assert!(svg.contains(label), "demo.svg lacks {label:?}");
+    }
+    foxglove_layout_names_only_logged_topics(&out.join("run.mcap"));
     // the learned calculus is a calculus
     common::ok(
         &[
@@ -242,4 +275,95 @@ fn an_empty_study_is_an_error() {
     assert_eq!(o.status.code(), Some(1));
     assert!(String::from_utf8_lossy(&o.stderr).contains("pairs must be >= 1"));
     assert!(!out.join("table.csv").exists());
+}
+
+/// `docs/foxglove/qrm-layout.json` is a Foxglove layout (every panel of the tree configured,
+/// every configured panel placed) whose panels read only topics — and fields — the demo's
+/// log has.
+fn foxglove_layout_names_only_logged_topics(log: &Path) {
+    let layout_path =
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("../docs/foxglove/qrm-layout.json");
+    let layout: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&layout_path).unwrap()).unwrap();
+    let configs = layout["configById"].as_object().unwrap();
+    fn leaves(node: &serde_json::Value, out: &mut Vec<String>) {
+        match node {
+            serde_json::Value::String(s) => out.push(s.clone()),
+            serde_json::Value::Object(o) => {
+                assert!(
+                    matches!(o["direction"].as_str(), Some("row" | "column")),
+                    "{node}"
+                );
+                leaves(&o["first"], out);
+                leaves(&o["second"], out);
+            }
+            other => panic!("not a layout node: {other}"),
+        }
+    }
+    let mut placed = Vec::new();
+    leaves(&layout["layout"], &mut placed);
+    placed.sort();
+    let mut configured: Vec<String> = configs.keys().cloned().collect();
+    configured.sort();
+    assert_eq!(placed, configured, "panels placed vs configured");
+    // (topic, field path or "") each panel reads
+    let mut wanted: Vec<(String, String)> = Vec::new();
+    let split = |path: &str| match path.split_once('.') {
+        Some((t, f)) => (t.to_owned(), f.to_owned()),
+        None => (path.to_owned(), String::new()),
+    };
+    for (id, cfg) in configs {
+        match id.split('!').next().unwrap() {
+            "3D" => {
+                let topics = cfg["topics"].as_object().unwrap();
+                assert!(topics.contains_key("/navigation"), "the plan is on");
+                assert!(topics.contains_key("/world"), "the map is on");
+                wanted.extend(topics.keys().map(|t| (t.clone(), String::new())));
+                assert_eq!(
+                    cfg["followTf"], "world",
+                    "the 3D panel follows the log's fixed frame"
+                );
+            }
+            "Plot" => wanted.extend(
+                cfg["paths"]
+                    .as_array()
+                    .unwrap()
+                    .iter()
+                    .map(|p| split(p["value"].as_str().unwrap())),
+            ),
+            "RosOut" => wanted.push(split(cfg["topicToRender"].as_str().unwrap())),
+            "RawMessages" => wanted.push(split(cfg["topicPath"].as_str().unwrap())),
+            other => panic!("panel type {other} not checked"),
+        }
+    }
+    assert!(
+        wanted
+            .iter()
+            .any(|(t, f)| t == "/map/entropy" && f == "mean_entropy"),
+        "an entropy plot"
+    );
+    let bytes = std::fs::read(log).unwrap();
+    let mut seen: std::collections::BTreeMap<String, serde_json::Value> = Default::default();
+    let mut counts: std::collections::BTreeMap<String, usize> = Default::default();
+    for m in mcap::MessageStream::new(&bytes).unwrap() {
+        let m = m.unwrap();
+        *counts.entry(m.channel.topic.clone()).or_default() += 1;
+        seen.entry(m.channel.topic.clone())
+            .or_insert_with(|| serde_json::from_slice(&m.data).unwrap());
+    }
+    for (topic, field) in &wanted {
+        let msg = seen
+            .get(topic)
+            .unwrap_or_else(|| panic!("layout reads {topic}, the log has {:?}", seen.keys()));
+        if !field.is_empty() {
+            assert!(
+                msg.get(field).is_some_and(serde_json::Value::is_number),
+                "{topic}.{field}"
+            );
+        }
+    }
+    assert!(
+        counts["/map/entropy"] >= 10,
+        "an entropy series, not one point"
+    );
 }

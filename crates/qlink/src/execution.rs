@@ -180,9 +180,11 @@ pub(crate) struct Walker<'p, P: Perception> {
     pub(crate) pos: [f64; 2],
     pub(crate) length: f64,
     pub(crate) trajectory: Vec<[f64; 2]>,
+    /// Index ranges of `trajectory` spent searching (see `NavOutcome::searches`).
+    pub(crate) searches: Vec<[usize; 2]>,
     step: f64,
     sensing: Sensing,
-    record: bool,
+    pub(crate) record: bool,
     watched: Vec<u32>,
     memory: HashMap<u32, Sighting>,
 }
@@ -200,6 +202,7 @@ impl<'p, P: Perception> Walker<'p, P> {
             pos: start,
             length: 0.0,
             trajectory: vec![start],
+            searches: Vec::new(),
             step,
             sensing,
             record,

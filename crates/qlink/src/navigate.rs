@@ -174,6 +174,14 @@ pub struct NavOutcome {
     pub trajectory: Vec<[f64; 2]>,
     /// Transitions made.
     pub transitions: Vec<TransitionRecord>,
+    /// The first plan's map elements, start to goal (empty when none was made).
+    #[serde(default)]
+    pub plan: Vec<usize>,
+    /// Where the robot searched for a link (or the goal): index ranges `[from, to]` into
+    /// `trajectory` (inclusive) covering the POMDP's commands and the fallback circles, so
+    /// a picture can tell searching from driving (empty when the trajectory is not kept).
+    #[serde(default)]
+    pub searches: Vec<[usize; 2]>,
 }
 
 impl NavOutcome {
@@ -191,6 +199,8 @@ impl NavOutcome {
             bound_direct: 0.0,
             trajectory: Vec::new(),
             transitions: Vec::new(),
+            plan: Vec::new(),
+            searches: Vec::new(),
         }
     }
 }
@@ -356,6 +366,7 @@ impl<'a, P: Perception> Navigator<'a, P> {
                 out.bound =
                     (2.0 * std::f64::consts::PI + 1.0) * self.config.map_range * plan.len() as f64;
                 out.bound_direct = self.config.map_range * plan.len() as f64;
+                out.plan.clone_from(&plan.elements);
                 first = false;
             }
             let mut failed = None;
@@ -406,6 +417,7 @@ impl<'a, P: Perception> Navigator<'a, P> {
         out.length = w.length;
         out.transit_length = out.transitions.iter().map(|t| t.length).sum();
         out.trajectory = w.trajectory;
+        out.searches = w.searches;
         out
     }
 
@@ -498,7 +510,6 @@ impl<'a, P: Perception> Navigator<'a, P> {
         commands: &mut Vec<usize>,
     ) -> Result<bool> {
         let map = self.map;
-        let range = self.config.controller.radius;
         let others: Vec<u32> = map.elements()[i]
             .landmarks
             .iter()
@@ -510,6 +521,25 @@ impl<'a, P: Perception> Navigator<'a, P> {
         };
         let (a, b) = (*a, *b);
         w.watch(&[a, b]);
+        let from = w.trajectory.len().saturating_sub(1);
+        let found = self.search_in_frame(w, i, [a, b], link, commands);
+        if w.record && w.trajectory.len() > from + 1 {
+            w.searches.push([from, w.trajectory.len() - 1]);
+        }
+        found
+    }
+
+    /// [`Navigator::search_link`] once the frame `[a, b]` is known.
+    fn search_in_frame(
+        &self,
+        w: &mut Walker<'_, P>,
+        i: usize,
+        [a, b]: [u32; 2],
+        link: u32,
+        commands: &mut Vec<usize>,
+    ) -> Result<bool> {
+        let map = self.map;
+        let range = self.config.controller.radius;
         let refs = self.config.references;
         // the frame as the robot places it now: measured, remembered, or not at all
         let frame = |w: &mut Walker<'_, P>| match (w.place(a, refs), w.place(b, refs)) {
