@@ -224,6 +224,54 @@ fn quick_field_experiment_writes_its_report() {
     assert!(spread.iter().all(|v| v["sd"].as_f64().unwrap() >= 0.0));
     let report = std::fs::read_to_string(out.join("report.md")).unwrap();
     assert!(report.contains("72.2 %") && report.contains("Table 4.2"));
+    // issue 18 defect 4: both bounds for every run, with their assumptions, per row
+    let header: Vec<&str> = trials.lines().next().unwrap().split(',').collect();
+    for col in [
+        "transit_length",
+        "prop2_bound",
+        "prop4_bound",
+        "within_prop2",
+        "within_prop4",
+        "a1_disc",
+        "a1_circle",
+        "a3_pairwise",
+        "a3_sight_lines",
+        "a4_straight",
+        "eff_prop2_bound",
+        "eff_within_prop4",
+    ] {
+        assert!(header.contains(&col), "trials.csv lacks {col}");
+    }
+    let col = |name: &str| header.iter().position(|h| *h == name).unwrap();
+    for line in trials.lines().skip(1) {
+        let f: Vec<&str> = line.split(',').collect();
+        let num = |name: &str| f[col(name)].parse::<f64>().unwrap();
+        // the field's controllers search: Assumption 4 never holds
+        assert_eq!(f[col("a4_straight")], "false");
+        let within2 = num("transit_length") <= num("prop2_bound") + 1e-6;
+        assert_eq!(f[col("within_prop2")], within2.to_string(), "{line}");
+        let plan = num("plan_len");
+        assert!(
+            (num("prop4_bound") - num("lidar_range") * plan).abs() < 1e-2,
+            "{line}"
+        );
+    }
+    assert!(report.contains("## Distance bounds: Propositions 2 and 4"));
+    assert!(report.contains("## The map's size"));
+    let bounds = summary["bounds"].as_array().unwrap();
+    assert_eq!(bounds.len(), 4 * 2, "4 variants × 2 ranges");
+    assert!(
+        bounds.iter().all(|b| b["contradictions"] == 0),
+        "{bounds:?}"
+    );
+    for w in worlds {
+        let z = &w["map_size"];
+        assert_eq!(
+            z["recorded_triplets"].as_u64().unwrap(),
+            6 * z["point_elements"].as_u64().unwrap(),
+            "a PQRM records each landmark set under its six orderings"
+        );
+    }
     for f in ["table_4_2.csv", "fig_4_9_thesis.svg", "fig_4_9_thesis.png"] {
         assert!(out.join(f).exists(), "{f}");
     }

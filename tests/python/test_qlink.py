@@ -70,5 +70,12 @@ def test_field_experiment_in_one_world():
         "success", "perceptual-aliasing", "insufficient-features",
         "insufficient-features+aliasing", "no-path",
     }
+    # issue 18: both distance bounds per run, at the lidar's and the effective range
+    for t in res["trials"]:
+        lidar, effective = t["bounds"]
+        assert lidar["range"] > effective["range"] > 0
+        assert lidar["length"] == t["transit_length"]
+        assert set(lidar["assumptions"]) == {"disc", "circle", "pairwise", "sight_lines", "straight"}
+        assert lidar["assumptions"]["straight"] is False
     with pytest.raises(qrm.InvalidInput):
         qrm.qlink_field(trials=0)

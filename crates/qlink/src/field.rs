@@ -61,6 +61,7 @@ use sim2d::{
     CandidateKind, ExtractorConfig, Hit, LidarConfig, Pose, TriangleRecognizer, World, extract,
 };
 
+use crate::bounds::{BoundCheck, Geometry};
 use crate::controller::{Controller, ControllerKind};
 use crate::error::{QlinkError, Result};
 use crate::graph::{CostModel, LinkGraph, pomdp_cost};
@@ -719,6 +720,13 @@ pub struct FieldTrial {
     pub detections: usize,
     /// Of those, on the wrong object.
     pub aliased: usize,
+    /// Length driven in transitions (m): what Propositions 2 and 4 bound.
+    pub transit_length: f64,
+    /// The first plan's map elements.
+    pub plan: Vec<usize>,
+    /// Propositions 2 and 4 for this run with their assumptions checked against the world:
+    /// at R = the lidar's range, and at R = the effective range.
+    pub bounds: [BoundCheck; 2],
     /// The path driven (every check).
     pub trajectory: Vec<[f64; 2]>,
 }
@@ -762,17 +770,7 @@ pub fn tasks(field: &FieldMap, params: &FieldParams) -> Result<(Vec<FieldTask>, 
     if goals.is_empty() {
         return Err(QlinkError::EmptyMap);
     }
-    let clear = |p: [f64; 2]| {
-        let [x0, x1, y0, y1] = spec.bounds;
-        let free = spec
-            .landmarks
-            .iter()
-            .map(|l| (l.pos, l.radius))
-            .chain(spec.clutter.iter().map(|c| (c.pos, c.radius)))
-            .all(|(q, r)| (p[0] - q[0]).hypot(p[1] - q[1]) > r + 1.0);
-        let off_walls = spec.walls.iter().all(|w| seg_dist(p, w.start, w.end) > 1.0);
-        free && off_walls && p[0] > x0 && p[0] < x1 && p[1] > y0 && p[1] < y1
-    };
+    let clear = |p: [f64; 2]| clear_of(spec, p, 1.0);
     let mut out = Vec::with_capacity(params.trials);
     let mut rng = ChaCha8Rng::seed_from_u64(params.seed ^ 0x0066_6965_6c64);
     let mut attempts = 0usize;
@@ -825,6 +823,80 @@ pub fn tasks(field: &FieldMap, params: &FieldParams) -> Result<(Vec<FieldTask>, 
         });
     }
     Ok((out, draws))
+}
+
+/// Whether `p` is inside the site and at least `margin` m from every object.
+fn clear_of(spec: &sim2d::WorldSpec, p: [f64; 2], margin: f64) -> bool {
+    let [x0, x1, y0, y1] = spec.bounds;
+    let free = spec
+        .landmarks
+        .iter()
+        .map(|l| (l.pos, l.radius))
+        .chain(spec.clutter.iter().map(|c| (c.pos, c.radius)))
+        .all(|(q, r)| (p[0] - q[0]).hypot(p[1] - q[1]) > r + margin);
+    let off_walls = spec
+        .walls
+        .iter()
+        .all(|w| seg_dist(p, w.start, w.end) > margin);
+    free && off_walls && p[0] > x0 && p[0] < x1 && p[1] > y0 && p[1] < y1
+}
+
+/// Where a mapped id truly is: the landmark it was most often recognised from, or the
+/// walls' frame points; `None` for clutter or a wall recognised as a point landmark.
+fn true_position(field: &FieldMap, id: u32) -> Option<[f64; 2]> {
+    match id {
+        WALL_FRAME_START => Some(field.wall_frame[0]),
+        WALL_FRAME_END => Some(field.wall_frame[1]),
+        _ => match field.truth.get(&id) {
+            Some(Hit::Landmark(i)) => field.scenario.world.spec().landmarks.get(*i).map(|l| l.pos),
+            _ => None,
+        },
+    }
+}
+
+/// Propositions 2 and 4 for a run, at R = the lidar's range and at R = the effective range,
+/// with the assumptions checked against the simulated site: a landmark is sensed from `x`
+/// when the extractor can get its minimum number of returns from it there (its angular
+/// width over the scanner's resolution) within the scanner's range, with nothing in between
+/// (sim2d's full occlusion); the walls' virtual frame points count as sensed within range.
+/// The field's controllers search, so Assumption 4 (straight lines) never holds.
+#[must_use]
+pub fn bound_checks(field: &FieldMap, plan: &[usize], transit_length: f64) -> [BoundCheck; 2] {
+    let world = &field.scenario.world;
+    let spec = world.spec();
+    let lidar = &field.scenario.lidar;
+    let min_returns = ExtractorConfig::default().min_points as f64;
+    let resolution = lidar.fov / (lidar.rays.max(2) - 1) as f64;
+    let position = |id: u32| true_position(field, id);
+    let sensed_from = |x: [f64; 2], id: u32| -> bool {
+        let Some(p) = true_position(field, id) else {
+            return false;
+        };
+        let d = (p[0] - x[0]).hypot(p[1] - x[1]);
+        if d > lidar.max_range {
+            return false;
+        }
+        match field.truth.get(&id) {
+            Some(Hit::Landmark(i)) => {
+                let r = spec.landmarks[*i].radius;
+                let returns = if d <= r {
+                    f64::INFINITY
+                } else {
+                    2.0 * (r / d).asin() / resolution
+                };
+                returns >= min_returns && world.is_fully_visible(x, *i)
+            }
+            _ => matches!(id, WALL_FRAME_START | WALL_FRAME_END),
+        }
+    };
+    let drivable = |x: [f64; 2]| clear_of(spec, x, 0.5);
+    let geometry = Geometry {
+        position: &position,
+        sensed_from: &sensed_from,
+        drivable: &drivable,
+    };
+    [lidar.max_range, field.stats.effective_range]
+        .map(|r| crate::bounds::check(&field.map, plan, r, false, transit_length, &geometry))
 }
 
 fn seg_dist(p: [f64; 2], a: [f64; 2], b: [f64; 2]) -> f64 {
@@ -963,6 +1035,7 @@ pub fn run_trial(
         FieldResult::InsufficientFeatures
     };
     let fin = trajectory.last().copied().unwrap_or(task.start);
+    let bounds = bound_checks(field, &out.plan, out.transit_length);
     Ok(FieldTrial {
         variant,
         task: *task,
@@ -973,6 +1046,9 @@ pub fn run_trial(
         final_distance: (fin[0] - task.goal_position[0]).hypot(fin[1] - task.goal_position[1]),
         detections,
         aliased,
+        transit_length: out.transit_length,
+        plan: out.plan.clone(),
+        bounds,
         trajectory,
     })
 }
@@ -1098,4 +1174,263 @@ pub fn summarise(trials: &[FieldTrial], variants: &[FieldVariant]) -> Vec<FieldS
             }
         })
         .collect()
+}
+
+/// Which R a [`BoundSummary`] uses.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum BoundRange {
+    /// The lidar's range (the R the navigator plans arcs and circles with).
+    Lidar,
+    /// The effective range measured from the mapping drive.
+    Effective,
+}
+
+impl BoundRange {
+    /// Both, in [`FieldTrial::bounds`] order.
+    pub const ALL: [Self; 2] = [Self::Lidar, Self::Effective];
+
+    fn index(self) -> usize {
+        match self {
+            Self::Lidar => 0,
+            Self::Effective => 1,
+        }
+    }
+
+    /// Its name in reports.
+    #[must_use]
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Lidar => "lidar range",
+            Self::Effective => "effective range",
+        }
+    }
+}
+
+/// Propositions 2 and 4 over one variant's successful runs at one R: how many stayed within
+/// each bound, how many met each assumption, and how many exceeded a bound whose assumptions
+/// held (a contradiction; the propositions say it cannot happen).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct BoundSummary {
+    /// The variant.
+    pub variant: FieldVariant,
+    /// Which R.
+    pub range: BoundRange,
+    /// Smallest and largest R over the worlds (m).
+    pub r: [f64; 2],
+    /// Successful runs.
+    pub runs: usize,
+    /// Of those, within Proposition 2's bound.
+    pub within_prop2: usize,
+    /// Of those, within Proposition 4's bound.
+    pub within_prop4: usize,
+    /// Runs meeting Assumption 1 (i).
+    pub disc: usize,
+    /// Runs meeting Assumptions 1 (ii) and 2.
+    pub circle: usize,
+    /// Runs meeting Assumption 3 (i).
+    pub pairwise: usize,
+    /// Runs meeting Assumption 3 (ii).
+    pub sight_lines: usize,
+    /// Runs meeting Assumption 4.
+    pub straight: usize,
+    /// Runs to which Proposition 2 applies.
+    pub prop2_applies: usize,
+    /// Runs to which Proposition 4 applies.
+    pub prop4_applies: usize,
+    /// Runs exceeding a bound whose assumptions held.
+    pub contradictions: usize,
+}
+
+impl BoundSummary {
+    /// Successful runs longer than Proposition 2's and Proposition 4's bound.
+    #[must_use]
+    pub fn exceeded(&self) -> [usize; 2] {
+        [self.runs - self.within_prop2, self.runs - self.within_prop4]
+    }
+
+    /// The thesis's finding for its field runs: none exceeds either bound.
+    #[must_use]
+    pub fn none_exceeded(&self) -> bool {
+        self.exceeded() == [0, 0]
+    }
+}
+
+/// [`BoundSummary`] of `variant`'s successful trials at `range`.
+#[must_use]
+pub fn bound_summary(
+    trials: &[FieldTrial],
+    variant: FieldVariant,
+    range: BoundRange,
+) -> BoundSummary {
+    let checks: Vec<&BoundCheck> = trials
+        .iter()
+        .filter(|t| t.variant == variant && t.result == FieldResult::Success)
+        .map(|t| &t.bounds[range.index()])
+        .collect();
+    let count = |f: &dyn Fn(&BoundCheck) -> bool| checks.iter().filter(|c| f(c)).count();
+    let r = checks
+        .iter()
+        .fold([f64::INFINITY, f64::NEG_INFINITY], |m, c| {
+            [m[0].min(c.range), m[1].max(c.range)]
+        });
+    BoundSummary {
+        variant,
+        range,
+        r: if checks.is_empty() { [0.0, 0.0] } else { r },
+        runs: checks.len(),
+        within_prop2: count(&BoundCheck::within_prop2),
+        within_prop4: count(&BoundCheck::within_prop4),
+        disc: count(&|c| c.assumptions.disc),
+        circle: count(&|c| c.assumptions.circle),
+        pairwise: count(&|c| c.assumptions.pairwise),
+        sight_lines: count(&|c| c.assumptions.sight_lines),
+        straight: count(&|c| c.assumptions.straight),
+        prop2_applies: count(&BoundCheck::prop2_applies),
+        prop4_applies: count(&BoundCheck::prop4_applies),
+        contradictions: count(&BoundCheck::contradicts),
+    }
+}
+
+/// How big the map is against what its landmarks allow, and what that does to plans.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct MapSize {
+    /// Point landmarks (recogniser ids) in the map.
+    pub point_ids: usize,
+    /// Triplets of them: C(n, 3).
+    pub possible_triplets: usize,
+    /// Landmark sets the point layer recorded (its PQRM's entries; a set may be recorded
+    /// under several of its orderings).
+    pub recorded_triplets: usize,
+    /// Point-triplet map elements (distinct landmark sets co-observed in `min_observations`
+    /// scans: what the thesis counts as its 44).
+    pub point_elements: usize,
+    /// Links of the link graph (directed edges, β of the params).
+    pub links: usize,
+    /// Mean number of elements a landmark belongs to.
+    pub elements_per_landmark: f64,
+}
+
+/// The size of a field map (see [`MapSize`]).
+///
+/// # Errors
+/// Graph errors.
+pub fn map_size(field: &FieldMap, params: &FieldParams) -> Result<MapSize> {
+    let graph = LinkGraph::new(&field.map, params.beta, |_, _, _| 1.0)?;
+    let points: Vec<u32> = field
+        .map
+        .landmarks()
+        .into_iter()
+        .filter(|&id| id != WALL_FRAME_START && id != WALL_FRAME_END)
+        .collect();
+    let n = points.len();
+    let is_point = |e: &crate::map::MapElement| {
+        e.landmarks
+            .iter()
+            .all(|&l| l != WALL_FRAME_START && l != WALL_FRAME_END)
+    };
+    let point_elements = field.map.elements().iter().filter(|e| is_point(e)).count();
+    let per: usize = points
+        .iter()
+        .map(|&l| {
+            field
+                .map
+                .elements_with(l)
+                .iter()
+                .filter(|&&e| is_point(&field.map.elements()[e]))
+                .count()
+        })
+        .sum();
+    Ok(MapSize {
+        point_ids: n,
+        possible_triplets: n * n.saturating_sub(1) * n.saturating_sub(2) / 6,
+        recorded_triplets: field.stats.point_elements,
+        point_elements,
+        links: graph.n_edges(),
+        elements_per_landmark: per as f64 / n.max(1) as f64,
+    })
+}
+
+/// Plans on the map as built against plans on the map restricted as §4.3.4's second case:
+/// only point triplets whose landmarks are pairwise within the effective range (the wall
+/// layer kept). Same tasks, unit costs, β of the params.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct RestrictedPlans {
+    /// Point elements of the map as built, and of the restricted map.
+    pub elements: [usize; 2],
+    /// Links (directed edges) of each.
+    pub links: [usize; 2],
+    /// Mean |P| (transitions) over the tasks with a path, on each.
+    pub mean_plan_len: [f64; 2],
+    /// Tasks with no path on each.
+    pub no_path: [usize; 2],
+    /// Tasks.
+    pub tasks: usize,
+}
+
+/// [`RestrictedPlans`] for `tasks`.
+///
+/// # Errors
+/// Map and graph errors.
+pub fn restricted_plans(
+    field: &FieldMap,
+    params: &FieldParams,
+    tasks: &[FieldTask],
+) -> Result<RestrictedPlans> {
+    let r = field.stats.effective_range;
+    let close = |ids: [u32; 3]| {
+        let p: Option<Vec<[f64; 2]>> = ids.iter().map(|&i| true_position(field, i)).collect();
+        p.is_some_and(|p| {
+            (0..3).all(|k| {
+                let (a, b) = (p[k], p[(k + 1) % 3]);
+                (a[0] - b[0]).hypot(a[1] - b[1]) <= r
+            })
+        })
+    };
+    let layers: Vec<Layer> = field
+        .map
+        .layers()
+        .iter()
+        .enumerate()
+        .map(|(k, l)| match (k, l) {
+            (0, Layer::Probabilistic(m)) => {
+                let mut m = m.clone();
+                m.retain(|s| close([s.0[0].0, s.0[1].0, s.0[2].0]));
+                Layer::Probabilistic(m)
+            }
+            _ => l.clone(),
+        })
+        .collect();
+    let restricted = QualitativeMap::new(layers)?;
+    let probe = LidarPerception::new(field, 0);
+    let mut out = RestrictedPlans {
+        elements: [0; 2],
+        links: [0; 2],
+        mean_plan_len: [0.0; 2],
+        no_path: [0; 2],
+        tasks: tasks.len(),
+    };
+    for (k, map) in [&field.map, &restricted].into_iter().enumerate() {
+        let graph = LinkGraph::new(map, params.beta, |_, _, _| 1.0)?;
+        out.elements[k] = map
+            .elements()
+            .iter()
+            .filter(|e| {
+                e.landmarks
+                    .iter()
+                    .all(|&l| l != WALL_FRAME_START && l != WALL_FRAME_END)
+            })
+            .count();
+        out.links[k] = graph.n_edges();
+        let mut lens = Vec::new();
+        for t in tasks {
+            let starts = map.elements_in_view(&probe.visible(t.start));
+            match graph.plan(map, &starts, t.goal, &BTreeSet::new()) {
+                Ok(p) => lens.push(p.len() as f64),
+                Err(_) => out.no_path[k] += 1,
+            }
+        }
+        out.mean_plan_len[k] = lens.iter().sum::<f64>() / lens.len().max(1) as f64;
+    }
+    Ok(out)
 }

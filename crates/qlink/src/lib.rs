@@ -35,6 +35,7 @@
 //! [`QlinkError`]: `EmptyMap`, `UnknownLandmark`, `SameStartGoal`, `NoPath`,
 //! `InvalidParameter`, `Unsupported`, and wrapped calculus, mapper and simulator errors.
 
+pub mod bounds;
 pub mod controller;
 mod error;
 pub mod execution;
@@ -46,6 +47,7 @@ pub mod perception;
 pub mod pomdp;
 pub mod study;
 
+pub use bounds::{Assumptions, BoundCheck, Geometry};
 pub use controller::{Controller, ControllerKind, circle, closest_point, robot_state};
 pub use error::{QlinkError, Result};
 pub use execution::{Arrival, Odometry, References, Sensing};

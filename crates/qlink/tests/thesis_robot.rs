@@ -314,3 +314,83 @@ fn the_occlusion_study_can_fail() {
         "{sparse:?} vs {dense:?}"
     );
 }
+
+/// Defect 4: every run gets both bounds with their assumptions checked against the world.
+/// A plan whose links cannot be sensed from the circle of radius R about them is outside
+/// Proposition 2 (its bound may be exceeded without contradiction); a searching controller is
+/// outside Proposition 4; and where Proposition 2 applies (R' = R, no occlusion) no run
+/// exceeds it.
+#[test]
+fn field_style_bound_checks_name_the_assumptions_each_run_meets() {
+    use qlink::bounds::{Geometry, check};
+    let positions = random_world(11, 40, 60.0);
+    let map = exact_map(&positions, 15.0);
+    let graph = LinkGraph::new(&map, 1, |_, _, _| 1.0).unwrap();
+    let list: Vec<(u32, [f64; 2])> = positions.iter().map(|(&k, &v)| (k, v)).collect();
+    let perception = RangePerception::new(&list, 15.0);
+    let config = thesis(15.0);
+    let nav = Navigator::new(&map, &graph, &perception, &config).unwrap();
+    let position = |id: u32| positions.get(&id).copied();
+    let at = &positions;
+    let within = |r: f64| {
+        move |x: [f64; 2], id: u32| {
+            at.get(&id)
+                .is_some_and(|p| (p[0] - x[0]).hypot(p[1] - x[1]) <= r + 1e-6)
+        }
+    };
+    let (full, short) = (within(15.0), within(12.0));
+    let drivable = |_: [f64; 2]| true;
+    let ids: Vec<u32> = positions.keys().copied().collect();
+    let (mut applied, mut runs) = (0, 0);
+    for k in 0..60 {
+        let (s, g) = (ids[k % ids.len()], ids[(k * 7 + 3) % ids.len()]);
+        if s == g {
+            continue;
+        }
+        let out = nav.navigate_between(s, g, 0.5).unwrap();
+        if !out.success || out.plan.len() < 2 {
+            continue;
+        }
+        runs += 1;
+        let sees_all = Geometry {
+            position: &position,
+            sensed_from: &full,
+            drivable: &drivable,
+        };
+        let b = check(&map, &out.plan, 15.0, false, out.transit_length, &sees_all);
+        assert_eq!(b.plan_len, out.plan_len);
+        assert!(b.assumptions.disc, "an exact map of range R keeps A1 (i)");
+        assert!(
+            !b.assumptions.straight && !b.prop4_applies(),
+            "the arc controller searches"
+        );
+        assert!(
+            !b.contradicts(),
+            "Proposition 2 exceeded where it applies: {b:?}"
+        );
+        if b.prop2_applies() {
+            applied += 1;
+        }
+        // a sensor shorter than R cannot keep the link in view on the circle of radius R
+        let myopic = Geometry {
+            position: &position,
+            sensed_from: &short,
+            drivable: &drivable,
+        };
+        let m = check(&map, &out.plan, 15.0, false, out.transit_length, &myopic);
+        assert!(!m.assumptions.circle && !m.prop2_applies());
+        // Proposition 4 with the direct controller needs pairwise distances within R: an
+        // element spanning more than R breaks A3 (i)
+        let direct = check(&map, &out.plan, 15.0, true, out.transit_length, &sees_all);
+        let spans = out.plan.iter().any(|&e| {
+            let p = map.elements()[e].landmarks.map(|l| positions[&l]);
+            (0..3).any(|i| {
+                let (a, b) = (p[i], p[(i + 1) % 3]);
+                (a[0] - b[0]).hypot(a[1] - b[1]) > 15.0
+            })
+        });
+        assert_eq!(direct.assumptions.pairwise, !spans);
+    }
+    assert!(runs >= 20, "only {runs} successful runs");
+    assert!(applied > 0, "Proposition 2 applied to no run");
+}

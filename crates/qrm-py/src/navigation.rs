@@ -127,6 +127,7 @@ pub(crate) fn qlink_field(
                     "goal": t.task.goal, "result": t.result, "plan_len": t.plan_len,
                     "replans": t.replans, "length": t.length,
                     "final_distance": t.final_distance,
+                    "transit_length": t.transit_length, "bounds": t.bounds,
                 })
             })
             .collect();
