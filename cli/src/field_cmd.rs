@@ -195,6 +195,7 @@ fn write_outputs(
         "detections",
         "aliased",
         "transit_length",
+        "bounded_transitions",
         "lidar_range",
         "prop2_bound",
         "prop4_bound",
@@ -234,6 +235,7 @@ fn write_outputs(
             (t.detections).to_string(),
             (t.aliased).to_string(),
             format!("{:.3}", t.transit_length),
+            b.transitions.to_string(),
         ];
         for (c, last) in [(b, true), (e, false)] {
             row.extend([
@@ -488,7 +490,9 @@ fn report(
         r,
         "## Distance bounds: Propositions 2 and 4\n\n\
          For every successful run, on the length driven in transitions (what the propositions \
-         bound; `transit_length` in trials.csv): Proposition 2, (2π + 1)·R·|P|, needs every \
+         bound; `transit_length` in trials.csv) over the transitions it made (|P|, or more \
+         after re-plans: `bounded_transitions`; the assumptions are checked on every element \
+         and link it used): Proposition 2, (2π + 1)·R·|P|, needs every \
          element's landmarks in a disc of radius R (A1 i) and, about every link, a drivable \
          circle of radius R from which the link is sensed (A1 ii, A2); Proposition 4, R·|P|, \
          needs every element's landmarks pairwise within R (A3 i), sight of both along the \

@@ -12,7 +12,10 @@
 //!   ([`Assumptions::sight_lines`]); 4: it drives those straight lines — the direct controller,
 //!   no search ([`Assumptions::straight`]).
 //!
-//! The bounds are on what the propositions bound: the length driven in transitions. A bound
+//! The bounds are on what the propositions bound: the length driven in transitions, over the
+//! transitions the run made — |P| of its plan, or more when it re-planned (each re-plan is a
+//! new plan whose transitions the propositions bound alike; the assumptions are checked on
+//! every element and link the run used). A bound
 //! exceeded while its assumptions hold would contradict the proposition
 //! ([`BoundCheck::contradicts`]); exceeded while they fail, it says only that the run was
 //! outside the guarantee. The world enters through [`Geometry`], so the same check serves a
@@ -61,8 +64,9 @@ pub struct Assumptions {
 pub struct BoundCheck {
     /// R (m).
     pub range: f64,
-    /// |P|: transitions of the first plan.
-    pub plan_len: usize,
+    /// Transitions bounded: |P| of the first plan, or the transitions made when re-plans
+    /// made more.
+    pub transitions: usize,
     /// Length driven in transitions (m): what the propositions bound.
     pub length: f64,
     /// Proposition 2's bound (2π + 1)·R·|P| (m).
@@ -74,13 +78,13 @@ pub struct BoundCheck {
 }
 
 impl BoundCheck {
-    /// The bounds for `length` driven over a plan of `plan_len` transitions at `range`.
+    /// The bounds for `length` driven over `transitions` transitions at `range`.
     #[must_use]
-    pub fn new(range: f64, plan_len: usize, length: f64, assumptions: Assumptions) -> Self {
-        let n = plan_len as f64;
+    pub fn new(range: f64, transitions: usize, length: f64, assumptions: Assumptions) -> Self {
+        let n = transitions as f64;
         Self {
             range,
-            plan_len,
+            transitions,
             length,
             prop2: (2.0 * std::f64::consts::PI + 1.0) * range * n,
             prop4: range * n,
@@ -122,23 +126,36 @@ impl BoundCheck {
     }
 }
 
-/// Checks the assumptions for a run whose first plan visited `plan` (map elements, start to
-/// goal) and drove `length` in transitions, at range `range`; `straight` says whether the
-/// robot drives straight lines between landmarks (Assumption 4: the direct controller).
+/// Checks the assumptions for a run whose first plan was `plan` (map elements, start to
+/// goal), which made the transitions `made` (from, to; re-plans included) and drove `length`
+/// in them, at range `range`; `straight` says whether the robot drives straight lines
+/// between landmarks (Assumption 4: the direct controller).
 #[must_use]
 pub fn check(
     map: &QualitativeMap,
     plan: &[usize],
+    made: &[(usize, usize)],
     range: f64,
     straight: bool,
     length: f64,
     world: &Geometry<'_>,
 ) -> BoundCheck {
-    let plan_len = plan.len().saturating_sub(1);
-    let elements: Vec<[u32; 3]> = plan
-        .iter()
-        .filter_map(|&e| map.elements().get(e).map(|m| m.landmarks))
+    let transitions = plan.len().saturating_sub(1).max(made.len());
+    // every step the run planned or took: consecutive plan elements and the transitions made
+    let steps: Vec<(usize, usize)> = plan
+        .windows(2)
+        .map(|w| (w[0], w[1]))
+        .chain(made.iter().copied())
         .collect();
+    let mut used: Vec<usize> = steps
+        .iter()
+        .flat_map(|&(a, b)| [a, b])
+        .chain(plan.iter().copied())
+        .collect();
+    used.sort_unstable();
+    used.dedup();
+    let landmarks = |e: usize| map.elements().get(e).map(|m| m.landmarks);
+    let elements: Vec<[u32; 3]> = used.iter().filter_map(|&e| landmarks(e)).collect();
     let points = |ids: &[u32; 3]| -> Option<[[f64; 2]; 3]> {
         Some([
             (world.position)(ids[0])?,
@@ -197,7 +214,7 @@ pub fn check(
         });
     BoundCheck::new(
         range,
-        plan_len,
+        transitions,
         length,
         Assumptions {
             disc,
@@ -244,6 +261,45 @@ mod tests {
         let h = 3f64.sqrt() / 2.0;
         let r = enclosing_radius(&[[0.0, 0.0], [1.0, 0.0], [0.5, h]]);
         assert!((r - 1.0 / 3f64.sqrt()).abs() < 1e-12);
+    }
+
+    /// Regression (the full field run flagged 12 "contradictions"): a run whose first plan
+    /// had |P| = 0 (its goal element in view) and which then re-planned was held to a bound
+    /// of 0 m. The bound covers the transitions made.
+    #[test]
+    fn the_bound_covers_transitions_made_after_a_replan() {
+        use crate::map::{Layer, QualitativeMap};
+        let positions: std::collections::BTreeMap<u32, [f64; 2]> = [
+            (0, [0.0, 0.0]),
+            (1, [4.0, 0.0]),
+            (2, [2.0, 3.0]),
+            (3, [6.0, 3.0]),
+        ]
+        .into_iter()
+        .collect();
+        let calculus = qsr_core::Calculus::builtin("left-right").unwrap();
+        let layer = Layer::exact_from_positions(calculus, &positions, 10.0).unwrap();
+        let map = QualitativeMap::new(vec![layer]).unwrap();
+        let (e, f) = (0, map.elements().len() - 1);
+        let position = |id: u32| positions.get(&id).copied();
+        let sensed = |_: [f64; 2], _: u32| true;
+        let drivable = |_: [f64; 2]| true;
+        let world = Geometry {
+            position: &position,
+            sensed_from: &sensed,
+            drivable: &drivable,
+        };
+        let b = check(&map, &[e], &[(e, f)], 10.0, false, 30.0, &world);
+        assert_eq!(b.transitions, 1);
+        assert!(
+            b.prop2_applies() && b.within_prop2() && !b.contradicts(),
+            "{b:?}"
+        );
+        let first_plan_only = check(&map, &[e], &[], 10.0, false, 30.0, &world);
+        assert!(
+            first_plan_only.contradicts(),
+            "30 m over no transition exceeds 0 m"
+        );
     }
 
     #[test]

@@ -861,7 +861,12 @@ fn true_position(field: &FieldMap, id: u32) -> Option<[f64; 2]> {
 /// (sim2d's full occlusion); the walls' virtual frame points count as sensed within range.
 /// The field's controllers search, so Assumption 4 (straight lines) never holds.
 #[must_use]
-pub fn bound_checks(field: &FieldMap, plan: &[usize], transit_length: f64) -> [BoundCheck; 2] {
+pub fn bound_checks(
+    field: &FieldMap,
+    plan: &[usize],
+    made: &[(usize, usize)],
+    transit_length: f64,
+) -> [BoundCheck; 2] {
     let world = &field.scenario.world;
     let spec = world.spec();
     let lidar = &field.scenario.lidar;
@@ -896,7 +901,7 @@ pub fn bound_checks(field: &FieldMap, plan: &[usize], transit_length: f64) -> [B
         drivable: &drivable,
     };
     [lidar.max_range, field.stats.effective_range]
-        .map(|r| crate::bounds::check(&field.map, plan, r, false, transit_length, &geometry))
+        .map(|r| crate::bounds::check(&field.map, plan, made, r, false, transit_length, &geometry))
 }
 
 fn seg_dist(p: [f64; 2], a: [f64; 2], b: [f64; 2]) -> f64 {
@@ -1035,7 +1040,8 @@ pub fn run_trial(
         FieldResult::InsufficientFeatures
     };
     let fin = trajectory.last().copied().unwrap_or(task.start);
-    let bounds = bound_checks(field, &out.plan, out.transit_length);
+    let made: Vec<(usize, usize)> = out.transitions.iter().map(|t| (t.from, t.to)).collect();
+    let bounds = bound_checks(field, &out.plan, &made, out.transit_length);
     Ok(FieldTrial {
         variant,
         task: *task,

@@ -357,8 +357,17 @@ fn field_style_bound_checks_name_the_assumptions_each_run_meets() {
             sensed_from: &full,
             drivable: &drivable,
         };
-        let b = check(&map, &out.plan, 15.0, false, out.transit_length, &sees_all);
-        assert_eq!(b.plan_len, out.plan_len);
+        let made: Vec<(usize, usize)> = out.transitions.iter().map(|t| (t.from, t.to)).collect();
+        let b = check(
+            &map,
+            &out.plan,
+            &made,
+            15.0,
+            false,
+            out.transit_length,
+            &sees_all,
+        );
+        assert_eq!(b.transitions, out.plan_len.max(made.len()));
         assert!(b.assumptions.disc, "an exact map of range R keeps A1 (i)");
         assert!(
             !b.assumptions.straight && !b.prop4_applies(),
@@ -377,11 +386,27 @@ fn field_style_bound_checks_name_the_assumptions_each_run_meets() {
             sensed_from: &short,
             drivable: &drivable,
         };
-        let m = check(&map, &out.plan, 15.0, false, out.transit_length, &myopic);
+        let m = check(
+            &map,
+            &out.plan,
+            &made,
+            15.0,
+            false,
+            out.transit_length,
+            &myopic,
+        );
         assert!(!m.assumptions.circle && !m.prop2_applies());
         // Proposition 4 with the direct controller needs pairwise distances within R: an
         // element spanning more than R breaks A3 (i)
-        let direct = check(&map, &out.plan, 15.0, true, out.transit_length, &sees_all);
+        let direct = check(
+            &map,
+            &out.plan,
+            &made,
+            15.0,
+            true,
+            out.transit_length,
+            &sees_all,
+        );
         let spans = out.plan.iter().any(|&e| {
             let p = map.elements()[e].landmarks.map(|l| positions[&l]);
             (0..3).any(|i| {
