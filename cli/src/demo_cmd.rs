@@ -297,13 +297,22 @@ pub fn run(a: DemoArgs) -> Result<()> {
     )?;
     outln!(
         "Q-Link to landmark {goal} with nothing but the qualitative map: {verdict}, {} \
-         transitions planned, {} re-plan(s), {:.0} m driven (Prop. 2 bound {:.0} m); picked as \
-         the longest plan that succeeds ({} run(s) tried).",
+         transitions planned, {} re-plan(s), {:.0} m driven (Prop. 2 bound {:.0} m); {}.",
         outcome.plan_len,
         outcome.replans,
         outcome.length,
         outcome.bound,
-        chosen.tried
+        if outcome.success {
+            format!(
+                "picked as the longest plan that succeeds ({} run(s) tried)",
+                chosen.tried
+            )
+        } else {
+            format!(
+                "none of the {} runs tried reached its goal: this is the longest plan's run",
+                chosen.tried
+            )
+        }
     )?;
     outln!(
         "Wrote {} in {:.1} s: demo.png (the run), run.mcap (Foxglove; layout \
