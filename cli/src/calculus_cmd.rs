@@ -421,7 +421,7 @@ fn compose(out: &mut impl Write, c: &Calculus, json: bool, cells: bool) -> Resul
     // `cells`: Algorithm 3 over the raster of a learned calculus (sound by construction)
     let owned;
     let t = if cells {
-        owned = serge::learn::compose_table(c)?;
+        owned = serge::learn::compose_table(c, &|| {})?;
         &owned
     } else {
         c.compose_table()?

@@ -62,17 +62,14 @@ pub fn run(a: FieldArgs) -> Result<()> {
     let stage = Staging::new(&a.out)?;
     let out_dir = stage.path().to_path_buf();
     let t0 = Instant::now();
-    let pb = crate::progress::bar(0, "field trials");
+    let pb = crate::progress::Bar::new(0, "field trials");
     let variants = FieldVariant::ALL;
     let mut worlds: Vec<World> = Vec::new();
     let mut trials: Vec<(usize, FieldTrial)> = Vec::new();
     let mut first: Option<FieldMap> = None;
     for w in 0..n_worlds {
         params.seed = a.seed + w as u64;
-        let (field, draws, ts) =
-            run_field(&params, &variants, &|n| pb.inc_length(n as u64), &|| {
-                pb.inc(1)
-            })?;
+        let (field, draws, ts) = run_field(&params, &variants, &pb)?;
         let s = &field.stats;
         pb.println(format!(
             "world {w} (seed {}): {} scans, {} ids ({} real landmarks of {}, {} false), {} + {} \

@@ -126,8 +126,8 @@ fn study(a: StudyArgs) -> Result<()> {
     let stage = Staging::new(&a.out)?;
     let out_dir = stage.path().to_path_buf();
     let t0 = Instant::now();
-    let pb = crate::progress::bar(0, "Q-Link navigations");
-    let (records, infos) = run_study(&config, &|n| pb.inc_length(n as u64), &|| pb.inc(1))?;
+    let pb = crate::progress::Bar::new(0, "Q-Link navigations");
+    let (records, infos) = run_study(&config, &pb)?;
     pb.finish_and_clear();
     for i in &infos {
         outln!("map: {}", describe(i))?;

@@ -514,7 +514,7 @@ fn learned_calculus(dir: &Path, data: &Dataset, map: &SalientRegionMap) -> Resul
     }
     // Algorithm 3 on a 48×48 resampling (the compose cost is quadratic in cells)
     let coarse = back.rasterise(map.grid.window, 48, 48, qsr_core::OutsideRule::Clamp)?;
-    let cells = serge::learn::compose_table(&coarse)?;
+    let cells = serge::learn::compose_table(&coarse, &|| {})?;
     let sampled = coarse.compose_table_with(&qsr_core::ComposeOptions {
         samples_per_pair: 2_000,
         ..qsr_core::ComposeOptions::default()
@@ -923,7 +923,7 @@ fn learn(a: LearnArgs) -> Result<()> {
             a.sigma
         ),
     )?;
-    let table = serge::learn::compose_table(&calc)?;
+    let table = serge::learn::compose_table(&calc, &|| {})?;
     // Written into a staging directory, moved into place only when all is done: a
     // failure or Ctrl-C leaves nothing a user could take for a result.
     let stage = Staging::new(&a.out)?;

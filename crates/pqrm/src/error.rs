@@ -35,6 +35,9 @@ pub enum PqrmError {
         /// The underlying frame error.
         reason: String,
     },
+    /// The caller asked the work to stop (Ctrl-C, a progress callback that raised).
+    #[error(transparent)]
+    Cancelled(#[from] qsr_core::progress::Cancelled),
     /// An error from the calculus layer.
     #[error(transparent)]
     Calculus(#[from] QsrError),

@@ -8,6 +8,7 @@
 //!     how many of those are truly wrong (precision) and how many wrong entries it finds
 //!     (recall).
 
+use qsr_core::progress::Progress;
 use std::collections::BTreeMap;
 
 use qsr_core::{Calculus, StateId};
@@ -531,7 +532,7 @@ fn score_unseen(
 pub fn run_reason_study(
     dataset: &Dataset,
     config: &ReasonStudyConfig,
-    progress: &(dyn Fn() + Sync),
+    progress: &dyn Progress,
 ) -> Result<Vec<ReasonCalculusResult>> {
     config.validate()?;
     let truth = dataset
@@ -543,7 +544,7 @@ pub fn run_reason_study(
         let calc = Calculus::resolve(name)?;
         // (a) and (c): the full map of the recording.
         let full = build_map(&calc, &dataset.scans, config.map)?;
-        progress();
+        progress.tick();
         let sets: Vec<LandmarkSet> = observed_sets(&full)
             .into_iter()
             .filter(|s| truth.state(&calc, s).ok().flatten().is_some())
@@ -572,7 +573,7 @@ pub fn run_reason_study(
             if repeat == 0 {
                 picture = reference_pair_picture(&visible, truth, &hidden, config.epsilon)?;
             }
-            progress();
+            progress.tick();
         }
         let hidden = predictors(&accs.0, &accs.1, &accs.2, Some(&accs.3));
         // (c)
@@ -603,7 +604,7 @@ pub fn run_reason_study(
                 .then(|| flagged_wrong as f64 / wrong_sets.len() as f64),
             base_rate: wrong_sets.len() as f64 / sets.len().max(1) as f64,
         };
-        progress();
+        progress.tick();
         // (b)
         let mut accs_b = new_accs();
         let mut reached_b = new_accs();
@@ -635,7 +636,7 @@ pub fn run_reason_study(
             for (total, n) in unseen_rounds.iter_mut().zip(per_round) {
                 *total += n;
             }
-            progress();
+            progress.tick();
         }
         let generic =
             qsr_core::reason::Algebra::of(&calc, qsr_core::reason::TableScope::GeneralPosition)?;

@@ -8,6 +8,7 @@
 //! [`compare_robots`] measures it on a recording: each robot alone, all robots pooled, and
 //! the robots' maps merged map by map.
 
+use qsr_core::progress::Progress;
 use std::collections::{BTreeMap, BTreeSet};
 
 use serde::{Deserialize, Serialize};
@@ -28,7 +29,7 @@ pub fn map_scans(
     calculus: &Calculus,
     config: PqrmConfig,
     robot: Option<u32>,
-    progress: &(dyn Fn() + Sync),
+    progress: &dyn Progress,
 ) -> Result<Pqrm> {
     let mut map = Pqrm::new(calculus.clone(), config)?;
     for scan in dataset
@@ -36,7 +37,7 @@ pub fn map_scans(
         .iter()
         .filter(|s| robot.is_none_or(|r| s.robot == r))
     {
-        progress();
+        progress.tick();
         map.update(scan)?;
     }
     Ok(map)
@@ -116,7 +117,7 @@ pub fn compare_robots(
     calculi: &[Calculus],
     config: PqrmConfig,
     tempers: &[f64],
-    progress: &(dyn Fn() + Sync),
+    progress: &dyn Progress,
 ) -> Result<Vec<RobotComparison>> {
     crate::temper::check_count(tempers, calculi.len())?;
     let truth = dataset

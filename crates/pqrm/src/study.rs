@@ -8,6 +8,7 @@
 //! Both studies sample the finest calculus (the first one given) once per step and merge its
 //! counts into the coarser ones, as the thesis evaluates all six on the same data.
 
+use qsr_core::progress::Progress;
 use std::collections::BTreeMap;
 
 use qsr_core::{Calculus, MergeMap};
@@ -427,7 +428,7 @@ pub fn run_monte_carlo_shard(
     config: &MonteCarloConfig,
     start: usize,
     count: usize,
-    progress: &(dyn Fn() + Sync),
+    progress: &dyn Progress,
 ) -> Result<Vec<TrialRecord>> {
     config.validate()?;
     let config = &completed(config);
@@ -436,10 +437,12 @@ pub fn run_monte_carlo_shard(
     let jobs: Vec<(usize, usize)> = (0..config.sigmas.len())
         .flat_map(|l| (start..end).map(move |t| (l, t)))
         .collect();
+    progress.add_total(jobs.len());
     jobs.par_iter()
         .map(|&(level, trial)| {
+            progress.check()?;
             let r = run_trial(config, &family, config.sigmas[level], level, trial);
-            progress();
+            progress.tick();
             r.map(|o| TrialRecord {
                 level,
                 trial,
@@ -545,15 +548,16 @@ pub fn aggregate_monte_carlo(
     })
 }
 
-/// Runs the Monte Carlo study. `progress` is called once per finished trial (from worker
-/// threads). Trials run in parallel; the result is identical for any thread count.
+/// Runs the Monte Carlo study. `progress` ticks once per finished trial (from worker
+/// threads) and is checked before each. Trials run in parallel; the result is identical for
+/// any thread count.
 ///
 /// # Errors
 /// [`PqrmError::InvalidConfig`]; calculus errors (unknown name, a calculus that is not a
-/// merge of the first).
+/// merge of the first); [`PqrmError::Cancelled`] when `progress` asks to stop.
 pub fn run_monte_carlo(
     config: &MonteCarloConfig,
-    progress: &(dyn Fn() + Sync),
+    progress: &dyn Progress,
 ) -> Result<MonteCarloResult> {
     let records = run_monte_carlo_shard(config, 0, config.trials, progress)?;
     aggregate_monte_carlo(config, &records)
@@ -618,7 +622,7 @@ pub fn run_real(
     dataset: &Dataset,
     calculi: &[String],
     config: PqrmConfig,
-    progress: &(dyn Fn() + Sync),
+    progress: &dyn Progress,
 ) -> Result<Vec<RealCalculusResult>> {
     run_real_tempered(
         dataset,
@@ -642,7 +646,7 @@ pub fn run_real_tempered(
     calculi: &[String],
     config: PqrmConfig,
     tempers: &[f64],
-    progress: &(dyn Fn() + Sync),
+    progress: &dyn Progress,
 ) -> Result<Vec<RealCalculusResult>> {
     crate::temper::check_count(tempers, calculi.len())?;
     let truth = dataset
@@ -666,7 +670,7 @@ pub fn run_real_tempered(
         .map(|c| (0, 0, 0, 0.0, vec![0; c.n_states()]))
         .collect();
     for (step, scan) in dataset.scans.iter().enumerate() {
-        progress();
+        progress.tick();
         if scan.observations.len() < 3 {
             continue;
         }
@@ -1008,7 +1012,7 @@ pub fn sensor_sweep(
     calculi: &[String],
     base: PqrmConfig,
     variants: &[(crate::sensor::SensorModel, f64)],
-    progress: &(dyn Fn() + Sync),
+    progress: &dyn Progress,
 ) -> Result<Vec<SensorVariant>> {
     let mut out = Vec::new();
     for &(sensor, temper) in variants {

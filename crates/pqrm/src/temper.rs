@@ -28,6 +28,7 @@
 //! The samples are drawn exactly as the mapper draws them (seed, step = the frame's index),
 //! so the evidence of the fit is the evidence of the map.
 
+use qsr_core::progress::Progress;
 use std::collections::{BTreeMap, HashMap};
 
 use qsr_core::Calculus;
@@ -240,7 +241,7 @@ pub fn fit_temper(
     scans: &[Scan],
     config: PqrmConfig,
     options: &TemperOptions,
-    progress: &(dyn Fn() + Sync),
+    progress: &dyn Progress,
 ) -> Result<Vec<TemperFit>> {
     options.validate()?;
     PqrmConfig {
@@ -279,7 +280,7 @@ pub fn fit_temper(
     let mut blocks: Vec<HashMap<LandmarkSet, BlockSums>> =
         calculi.iter().map(|_| HashMap::new()).collect();
     for (i, scan) in scans.iter().enumerate() {
-        progress();
+        progress.tick();
         if scan.observations.len() < 3 {
             continue;
         }
@@ -326,7 +327,7 @@ pub fn fit_temper(
     };
     let mut block = 0;
     for (i, scan) in scans.iter().enumerate() {
-        progress();
+        progress.tick();
         let b = block_of(i, n, k);
         if b != block {
             flush(&mut current, &mut totals, &mut units);

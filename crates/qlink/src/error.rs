@@ -25,6 +25,9 @@ pub enum QlinkError {
     /// An operation a calculus or controller does not support.
     #[error("unsupported: {0}")]
     Unsupported(String),
+    /// The caller asked the work to stop (Ctrl-C, a progress callback that raised).
+    #[error(transparent)]
+    Cancelled(#[from] qsr_core::progress::Cancelled),
     /// An error from the calculus layer.
     #[error(transparent)]
     Calculus(#[from] qsr_core::QsrError),

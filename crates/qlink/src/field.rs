@@ -52,6 +52,7 @@ use std::collections::{BTreeMap, BTreeSet};
 use std::sync::Mutex;
 
 use pqrm::{LandmarkId, Observation, Pqrm, PqrmConfig, Scan};
+use qsr_core::progress::Progress;
 use qsr_core::{Calculus, FrameKind};
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -1083,20 +1084,22 @@ pub fn nav_config(
 }
 
 /// Maps the field and runs every variant's trials (in parallel; the result does not depend
-/// on the thread count). `on_total(n)` is called once with the number of trials,
-/// `on_done()` after each.
+/// on the thread count). `progress` is told the number of trials once the tasks are drawn,
+/// ticks after each and is checked before the mapping drive, after it and before each trial
+/// (a cancelled run returns [`QlinkError::Cancelled`]).
 ///
 /// # Errors
 /// As [`map_field`], [`tasks`], [`field_graph`], [`run_trial`].
 pub fn run_field(
     params: &FieldParams,
     variants: &[FieldVariant],
-    on_total: &(dyn Fn(usize) + Sync),
-    on_done: &(dyn Fn() + Sync),
+    progress: &dyn Progress,
 ) -> Result<(FieldMap, TaskDraws, Vec<FieldTrial>)> {
+    progress.check()?;
     let field = map_field(params)?;
+    progress.check()?;
     let (tasks, draws) = tasks(&field, params)?;
-    on_total(tasks.len() * variants.len());
+    progress.add_total(tasks.len() * variants.len());
     let mut all = Vec::new();
     for &v in variants {
         let (graph, pomdps) = field_graph(&field, params, v)?;
@@ -1104,8 +1107,9 @@ pub fn run_field(
         let trials: Vec<FieldTrial> = tasks
             .par_iter()
             .map(|t| {
+                progress.check()?;
                 let r = run_trial(&field, &graph, &config, v, t);
-                on_done();
+                progress.tick();
                 r
             })
             .collect::<Result<_>>()?;

@@ -15,6 +15,7 @@
 //! its five settings); each occlusion setting maps its own world of discs, with occlusion
 //! (the whole experiment happens in that environment).
 
+use qsr_core::progress::Progress;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
@@ -440,7 +441,7 @@ fn run_pairs<P: Perception>(
     pairs: &[(u32, u32)],
     fields: &[(u32, DistanceField)],
     setting: &Setting,
-    progress: &(dyn Fn() + Sync),
+    progress: &dyn Progress,
 ) -> Result<Vec<TrialRecord>> {
     let nav = Navigator::new(&world.map, &world.graph, perception, config)?;
     // start beside the start landmark, clear of its disc in the occlusion trial
@@ -452,6 +453,7 @@ fn run_pairs<P: Perception>(
     pairs
         .par_iter()
         .map(|&(s, g)| {
+            progress.check()?;
             let field = fields.iter().find(|f| f.0 == g).map(|f| &f.1);
             let p = perception
                 .position(s)
@@ -462,7 +464,7 @@ fn run_pairs<P: Perception>(
             } else {
                 nav.navigate([p[0] + offset, p[1]], g, field, false)?
             };
-            progress();
+            progress.tick();
             Ok(TrialRecord {
                 trial: setting.trial.clone(),
                 value: setting.value,
@@ -492,7 +494,7 @@ pub fn run_setting(
     pairs: &[(u32, u32)],
     fields: &[(u32, DistanceField)],
     setting: &Setting,
-    progress: &(dyn Fn() + Sync),
+    progress: &dyn Progress,
 ) -> Result<Vec<TrialRecord>> {
     let nav = config.nav_config(setting)?;
     let range = sensor_range(setting);
@@ -601,15 +603,15 @@ type Prepared = (StudyWorld, Vec<(u32, DistanceField)>);
 
 /// Runs every setting of `config`: one point-landmark map for the sensor-range trial, one
 /// map per landmark size for the occlusion trial (shared by its schedules). `progress` is
-/// called after every navigation (each setting's navigations are announced first through
-/// `start`).
+/// told each setting's navigations as the setting starts, ticks after every navigation and
+/// is checked before each setting and each navigation (a cancelled run returns
+/// [`QlinkError::Cancelled`]).
 ///
 /// # Errors
 /// As [`build_world`] and [`run_setting`].
 pub fn run_study(
     config: &StudyConfig,
-    start: &dyn Fn(usize),
-    progress: &(dyn Fn() + Sync),
+    progress: &dyn Progress,
 ) -> Result<(Vec<TrialRecord>, Vec<SettingInfo>)> {
     let settings = config.settings()?;
     // worlds by landmark size (`None`: the point landmarks of the sensor-range trial)
@@ -617,6 +619,7 @@ pub fn run_study(
     let mut records = Vec::new();
     let mut infos = Vec::new();
     for setting in &settings {
+        progress.check()?;
         let t = std::time::Instant::now();
         let size = (setting.trial == "occlusion").then_some(setting.value);
         let key = size.map(f64::to_bits);
@@ -632,7 +635,7 @@ pub fn run_study(
             .ok_or(QlinkError::EmptyMap)?;
         let pairs = pairs(&world.landmarks, setting.pairs, config.seed);
         let build_seconds = t.elapsed().as_secs_f64();
-        start(pairs.len());
+        progress.add_total(pairs.len());
         let tn = std::time::Instant::now();
         records.extend(run_setting(
             world, config, &pairs, fields, setting, progress,

@@ -153,7 +153,7 @@ fn field_trials_are_deterministic_and_add_up() {
             .num_threads(threads)
             .build()
             .unwrap()
-            .install(|| run_field(&params, &variants, &|_| {}, &|| {}).unwrap())
+            .install(|| run_field(&params, &variants, &|| {}).unwrap())
     };
     let (_, d1, t1) = run(1);
     let (_, d2, t2) = run(2);

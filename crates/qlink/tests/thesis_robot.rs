@@ -303,7 +303,7 @@ fn the_occlusion_study_can_fail() {
         schedule_pairs: Some(120),
         ..StudyConfig::quick(2)
     };
-    let (records, _) = run_study(&config, &|_| {}, &|| {}).unwrap();
+    let (records, _) = run_study(&config, &|| {}).unwrap();
     let rows = table(&records);
     assert_eq!(rows.len(), 2);
     let sparse = &rows[0];

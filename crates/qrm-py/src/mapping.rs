@@ -486,17 +486,20 @@ fn config_from_json(config: &str) -> PyResult<MonteCarloConfig> {
 
 /// Runs trials `start..start+count` of the Monte Carlo study described by `config` (JSON);
 /// returns the trial records as JSON. Shards with the same config merge into one run.
+/// Watched: Ctrl-C stops it, `progress(done, total)` counts trials.
 #[pyfunction]
+#[pyo3(signature = (config, start, count, progress = None))]
 pub(crate) fn monte_carlo_shard(
     py: Python<'_>,
     config: &str,
     start: usize,
     count: usize,
+    progress: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<String> {
     let cfg = config_from_json(config)?;
-    let records = crate::pool::detach(py, || {
-        pqrm::study::run_monte_carlo_shard(&cfg, start, count, &|| {})
-    })
+    let records = crate::pool::watched(py, progress, |watch| {
+        pqrm::study::run_monte_carlo_shard(&cfg, start, count, watch)
+    })?
     .map_err(perr)?;
     serde_json::to_string(&records).map_err(|e| invalid(e.to_string()))
 }

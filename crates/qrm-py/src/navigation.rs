@@ -98,16 +98,18 @@ pub(crate) fn navigate(
 
 /// The §4.4.2 field experiment in one world (quick or full settings, `trials` per variant):
 /// JSON `{"mapping": {...}, "draws": {...}, "variants": [...], "trials": [...]}` (trials
-/// without their trajectories).
+/// without their trajectories). Watched: Ctrl-C stops it, `progress(done, total)` is called
+/// as trials finish.
 #[pyfunction]
-#[pyo3(signature = (quick, trials, seed))]
+#[pyo3(signature = (quick, trials, seed, progress = None))]
 pub(crate) fn qlink_field(
     py: Python<'_>,
     quick: bool,
     trials: Option<usize>,
     seed: u64,
+    progress: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<String> {
-    crate::pool::detach(py, move || -> Result<String, QlinkError> {
+    crate::pool::watched(py, progress, move |watch| -> Result<String, QlinkError> {
         let mut params = if quick {
             qlink::field::FieldParams::quick(seed)
         } else {
@@ -117,7 +119,7 @@ pub(crate) fn qlink_field(
             params.trials = n;
         }
         let variants = qlink::field::FieldVariant::ALL;
-        let (field, draws, ts) = qlink::field::run_field(&params, &variants, &|_| {}, &|| {})?;
+        let (field, draws, ts) = qlink::field::run_field(&params, &variants, watch)?;
         let summaries = qlink::field::summarise(&ts, &variants);
         let rows: Vec<serde_json::Value> = ts
             .iter()
@@ -135,23 +137,25 @@ pub(crate) fn qlink_field(
             "mapping": field.stats, "draws": draws, "variants": summaries, "trials": rows,
         }))
         .map_err(|e| QlinkError::InvalidParameter(e.to_string()))
-    })
+    })?
     .map_err(qlink_err)
 }
 
 /// The §4.4.1 study (quick or full) for `trial` = sensor-range, occlusion or all; returns
-/// JSON `{"table": [...], "records": [...]}`.
+/// JSON `{"table": [...], "records": [...]}`. Watched: Ctrl-C stops it,
+/// `progress(done, total)` is called as navigations finish.
 #[pyfunction]
-#[pyo3(signature = (trial, quick, pairs, seed))]
+#[pyo3(signature = (trial, quick, pairs, seed, progress = None))]
 pub(crate) fn qlink_study(
     py: Python<'_>,
     trial: &str,
     quick: bool,
     pairs: Option<usize>,
     seed: u64,
+    progress: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<String> {
     let trial = trial.to_owned();
-    crate::pool::detach(py, move || -> Result<String, QlinkError> {
+    crate::pool::watched(py, progress, move |watch| -> Result<String, QlinkError> {
         let mut config = if quick {
             qlink::study::StudyConfig::quick(seed)
         } else {
@@ -161,10 +165,10 @@ pub(crate) fn qlink_study(
         if pairs.is_some() {
             config.pairs = pairs;
         }
-        let (records, _) = qlink::study::run_study(&config, &|_| {}, &|| {})?;
+        let (records, _) = qlink::study::run_study(&config, watch)?;
         let table = qlink::study::table(&records);
         serde_json::to_string(&serde_json::json!({"table": table, "records": records}))
             .map_err(|e| QlinkError::InvalidParameter(e.to_string()))
-    })
+    })?
     .map_err(qlink_err)
 }

@@ -17,9 +17,12 @@
 //! results do not depend on it (every parallel loop of the crates is thread-count
 //! independent).
 
+use std::sync::mpsc::{RecvTimeoutError, sync_channel};
 use std::sync::{Arc, Mutex};
+use std::time::Duration;
 
 use pyo3::prelude::*;
+use qsr_core::progress::Watch;
 
 /// The pool and the process that built it.
 struct Owned {
@@ -72,6 +75,90 @@ where
         Some(pool) => pool.install(f),
         None => f(),
     })
+}
+
+/// How often a watched call looks for Ctrl-C and reports progress: often enough that an
+/// interrupt feels immediate, rarely enough that a Python callback costs nothing.
+const WATCH_PERIOD: Duration = Duration::from_millis(100);
+
+/// Runs `f` like [`detach`] while the calling thread watches it — the entry point of every
+/// call that can run for seconds or more.
+///
+/// Why: with the interpreter released, Python handles Ctrl-C only when the call returns, and
+/// a silent minute looks like a hang. So the work runs on a thread of its own (inside this
+/// process's pool) with a [`Watch`], and the calling thread wakes every [`WATCH_PERIOD`]:
+/// it runs Python's signal handlers (`check_signals`: a `KeyboardInterrupt` stops the work)
+/// and, when the count changed, calls `callback(done, total)` with the interpreter held (an
+/// exception it raises stops the work too). A stop is a request: the work notices it at its
+/// next unit and returns early; this call waits for that, so nothing keeps running behind
+/// the caller's back, and then raises the interrupt or the callback's exception. A finished
+/// run's result does not depend on whether it was watched.
+pub(crate) fn watched<T, F>(
+    py: Python<'_>,
+    callback: Option<&Bound<'_, PyAny>>,
+    f: F,
+) -> PyResult<T>
+where
+    T: Send,
+    F: FnOnce(&Watch) -> T + Send,
+{
+    let pool = current(py);
+    let watch = Watch::new();
+    let mut reported = (0, 0);
+    let mut stopped: Option<PyErr> = None;
+    let mut report = |stopped: &mut Option<PyErr>| {
+        let now = (watch.done(), watch.total());
+        if stopped.is_none()
+            && now != reported
+            && let Some(cb) = callback
+        {
+            reported = now;
+            if let Err(e) = cb.call1(now) {
+                watch.stop();
+                *stopped = Some(e);
+            }
+        }
+    };
+    let out = std::thread::scope(|scope| {
+        let (tx, rx) = sync_channel(1);
+        let w = &watch;
+        scope.spawn(move || {
+            let out = match pool {
+                Some(pool) => pool.install(|| f(w)),
+                None => f(w),
+            };
+            // The receiver lives until this thread is joined: the send cannot fail.
+            let _ = tx.send(out);
+        });
+        let mut rx = rx;
+        loop {
+            // The receiver is moved in and back: the interpreter-free closure must be Send.
+            let (got, back) = py.detach(move || (rx.recv_timeout(WATCH_PERIOD), rx));
+            rx = back;
+            match got {
+                Ok(out) => return Some(out),
+                // The worker panicked: the scope re-raises it (pyo3 turns it into a
+                // PanicException).
+                Err(RecvTimeoutError::Disconnected) => return None,
+                Err(RecvTimeoutError::Timeout) => {}
+            }
+            if stopped.is_none()
+                && let Err(e) = py.check_signals()
+            {
+                watch.stop();
+                stopped = Some(e);
+            }
+            report(&mut stopped);
+        }
+    });
+    report(&mut stopped);
+    match (stopped, out) {
+        (Some(e), _) => Err(e),
+        (None, Some(out)) => Ok(out),
+        (None, None) => Err(pyo3::panic::PanicException::new_err(
+            "a worker thread of qrm panicked",
+        )),
+    }
 }
 
 /// The number of worker threads of this process's pool (for tests and diagnostics).

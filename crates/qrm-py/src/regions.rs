@@ -221,15 +221,16 @@ pub(crate) fn serge_run(
 
 /// The thesis's cross-validation study on a generated dataset; returns JSON records.
 #[pyfunction]
-#[pyo3(signature = (dataset, quick, seed))]
+#[pyo3(signature = (dataset, quick, seed, progress = None))]
 pub(crate) fn serge_cross_validate(
     py: Python<'_>,
     dataset: &str,
     quick: bool,
     seed: u64,
+    progress: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<String> {
     let name = dataset.to_owned();
-    let records = crate::pool::detach(py, move || {
+    let records = crate::pool::watched(py, progress, move |watch| {
         let config = if quick {
             serge::study::StudyConfig::quick(seed)
         } else {
@@ -239,20 +240,24 @@ pub(crate) fn serge_cross_validate(
         if data.observations.is_some() {
             data = data.with_samples(config.samples);
         }
-        serge::study::cross_validate(&data, &config, &|| {})
-    })
+        serge::study::cross_validate(&data, &config, watch)
+    })?
     .map_err(serge_err)?;
     serde_json::to_string(&records).map_err(|e| invalid(e.to_string()))
 }
 
 /// Algorithm 3 compose table of a learned (raster) calculus, sound by construction.
+/// Watched: Ctrl-C stops it, `progress(done, total)` counts raster cells.
 #[pyfunction]
+#[pyo3(signature = (calculus, progress = None))]
 pub(crate) fn compose_cells(
     py: Python<'_>,
     calculus: &Calculus,
+    progress: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<std::collections::BTreeMap<String, std::collections::BTreeMap<String, Vec<String>>>> {
     let c = &calculus.inner;
-    let table = crate::pool::detach(py, || serge::learn::compose_table(c)).map_err(serge_err)?;
+    let table = crate::pool::watched(py, progress, |watch| serge::learn::compose_table(c, watch))?
+        .map_err(serge_err)?;
     Ok(c.states()
         .map(|r| {
             (

@@ -75,6 +75,7 @@ mod merge;
 mod neighbours;
 mod partition;
 mod permute;
+pub mod progress;
 pub mod reason;
 #[cfg(feature = "svg")]
 mod render;

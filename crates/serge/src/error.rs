@@ -38,6 +38,9 @@ pub enum SergeError {
         /// The index.
         index: usize,
     },
+    /// The caller asked the work to stop (Ctrl-C, a progress callback that raised).
+    #[error(transparent)]
+    Cancelled(#[from] qsr_core::progress::Cancelled),
     /// An error from the calculus layer (export of a learned calculus).
     #[error(transparent)]
     Calculus(#[from] QsrError),

@@ -24,6 +24,7 @@
 //! the tests). Cost: `N²` cell pairs and `O(Q)` summed-area lookups each — about 1 s for a
 //! 64 × 64 raster on two cores.
 
+use qsr_core::progress::Progress;
 use qsr_core::{Calculus, ComposeTable, OutsideRule, Point2, StateId, TernaryFrame};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
@@ -371,11 +372,14 @@ impl RasterIndex {
 }
 
 /// The compose table of a learned calculus by Algorithm 3 over cells (see the module docs):
-/// sound for every configuration.
+/// sound for every configuration. `progress` is told the number of cells (the outside counts
+/// as one when its state is fixed), ticks after each and is checked before each: a fine
+/// raster takes seconds to tens of seconds.
 ///
 /// # Errors
-/// [`SergeError::InvalidParameter`] for a calculus that is not a ternary raster calculus.
-pub fn compose_table(calculus: &Calculus) -> Result<ComposeTable> {
+/// [`SergeError::InvalidParameter`] for a calculus that is not a ternary raster calculus;
+/// [`SergeError::Cancelled`] when `progress` asks to stop.
+pub fn compose_table(calculus: &Calculus, progress: &dyn Progress) -> Result<ComposeTable> {
     let index = RasterIndex::new(calculus)?;
     let q = index.n_states;
     let n = index.cells.len();
@@ -398,12 +402,14 @@ pub fn compose_table(calculus: &Calculus) -> Result<ComposeTable> {
         .map(|c| (usize::from(index.cells[c]), boxes[c]))
         .chain(extra)
         .collect();
+    progress.add_total(all.len());
     // rows[r][s][t]
     let rows: Vec<Vec<Vec<bool>>> = (0..q)
         .into_par_iter()
         .map(|r| {
             let mut row = vec![vec![false; q]; q];
             for &(_, cb) in all.iter().filter(|(s, _)| *s == r) {
+                progress.check()?;
                 for &(s, pb) in &all {
                     if row[s].iter().all(|&b| b) {
                         continue;
@@ -411,10 +417,11 @@ pub fn compose_table(calculus: &Calculus) -> Result<ComposeTable> {
                     let (x, y) = RasterIndex::place(cb, pb);
                     index.states_in(x, y, &mut row[s]);
                 }
+                progress.tick();
             }
-            row
+            Ok(row)
         })
-        .collect();
+        .collect::<Result<_>>()?;
     let table = rows
         .into_iter()
         .map(|row| {

@@ -6,6 +6,7 @@
 //! each map is scored on the test fold: the test-data log likelihood `log ψ3(B_test, L^B,
 //! R)` and the error rate (test points outside their belief's region), as §3.4.1 defines.
 
+use qsr_core::progress::Progress;
 use rand::SeedableRng;
 use rand::seq::SliceRandom;
 use rand_chacha::ChaCha8Rng;
@@ -163,7 +164,8 @@ fn folds_of(dataset: &Dataset, folds: usize, seed: u64) -> Vec<Vec<usize>> {
         .collect()
 }
 
-/// Runs the cross-validation study; `progress` is called after every SERGE run.
+/// Runs the cross-validation study; `progress` ticks after every SERGE run and is checked
+/// before each (a cancelled study returns [`SergeError::Cancelled`]).
 ///
 /// # Errors
 /// [`SergeError::InvalidParameter`] for fewer than 2 folds or a belief with fewer points
@@ -171,7 +173,7 @@ fn folds_of(dataset: &Dataset, folds: usize, seed: u64) -> Vec<Vec<usize>> {
 pub fn cross_validate(
     dataset: &Dataset,
     config: &StudyConfig,
-    progress: &(dyn Fn() + Sync),
+    progress: &dyn Progress,
 ) -> Result<Vec<CvRecord>> {
     if config.folds < 2 {
         return Err(SergeError::InvalidParameter("at least 2 folds".into()));
@@ -217,7 +219,9 @@ pub fn cross_validate(
                     .map(|&s| ("sigma", config.mu_for_sigma.min(k), s)),
             )
             .collect();
+        progress.add_total(settings.len());
         for (sweep, mu, sigma) in settings {
+            progress.check()?;
             let params = SergeParams::new(mu, sigma)
                 .trials(config.trials_per_belief * k)
                 .seed(fseed);
@@ -234,7 +238,7 @@ pub fn cross_validate(
                 errors,
                 points,
             });
-            progress();
+            progress.tick();
         }
     }
     Ok(records)

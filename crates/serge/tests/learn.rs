@@ -111,7 +111,7 @@ fn pqrm_maps_with_a_learned_calculus() {
 #[test]
 fn algorithm_3_is_sound_for_random_configurations() {
     let calc = learned_map().to_calculus("toy", "test").unwrap();
-    let table = compose_table(&calc).unwrap();
+    let table = compose_table(&calc, &|| {}).unwrap();
     let mut rng = ChaCha8Rng::seed_from_u64(3);
     let a = Point2::new(0.0, 0.0);
     let b = Point2::new(0.0, 1.0);
@@ -170,12 +170,12 @@ fn algorithm_3_is_sound_for_random_configurations() {
 #[test]
 fn algorithm_3_needs_a_raster_calculus() {
     let edc = Calculus::builtin("edc").unwrap();
-    assert!(compose_table(&edc).is_err());
+    assert!(compose_table(&edc, &|| {}).is_err());
     // a rasterised EDC composes soundly against the original's configurations
     let raster = edc
         .rasterise([-3.0, 3.0, -2.0, 3.0], 24, 20, qsr_core::OutsideRule::Clamp)
         .unwrap();
-    let table = compose_table(&raster).unwrap();
+    let table = compose_table(&raster, &|| {}).unwrap();
     let sampled = raster.compose_table().unwrap();
     for r in raster.states() {
         for s in raster.states() {

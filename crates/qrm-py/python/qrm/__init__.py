@@ -11,11 +11,16 @@ region maps and learned calculi (`serge`, `SalientRegionMap`, `compose_cells`,
 Every error is a `QrmError`; the subclasses say what kind and are also the builtin a caller
 would catch (`InvalidInput` is a `ValueError`, `IoError` an `OSError`; see the stubs).
 The module is fork-safe: each process builds its own worker threads (`worker_threads()`).
+
+Long calls (`qlink_study`, `qlink_field`, `compose_cells`, `serge_cross_validate`,
+`monte_carlo_shard`) stop on Ctrl-C within a fraction of a second (raising
+`KeyboardInterrupt`) and take `progress=`: a tqdm bar (or anything with `update(n)`) or a
+callable `progress(done, total)`.
 """
 from __future__ import annotations
 
 import json
-from typing import Any, Dict, List, Mapping, Optional, Sequence, Tuple, Union
+from typing import Any, Callable, Dict, List, Mapping, Optional, Protocol, Sequence, Tuple, Union, cast
 
 from ._qrm import (
     BinaryCalculus,
@@ -31,7 +36,6 @@ from ._qrm import (
     UnsupportedError,
     __version__,
     builtin_names,
-    compose_cells,
     read_observations,
     single_observation,
     worker_threads,
@@ -46,6 +50,8 @@ __all__ = [
     "InvalidInput",
     "IoError",
     "Pqrm",
+    "Progress",
+    "ProgressBar",
     "QrmError",
     "SalientRegionMap",
     "SpecError",
@@ -72,7 +78,57 @@ __all__ = [
 ]
 
 
-def monte_carlo_config(*, quick: bool = False, **overrides: Any) -> Dict[str, Any]:
+class ProgressBar(Protocol):
+    """What qrm needs of a progress bar — tqdm's has it: `update(n)` advances it by n. When
+    the bar also has a `total` attribute, qrm sets it to the work's total as the work announces
+    it (and calls `refresh()` if there is one)."""
+
+    def update(self, n: int = 1) -> object: ...
+
+
+Progress = Union[ProgressBar, Callable[[int, int], object]]
+"""A `progress=` argument: a `ProgressBar` such as `tqdm.tqdm()`, or a callable
+`progress(done, total)` called (with the interpreter held, about ten times a second at most)
+when the count changes. An exception it raises stops the work and is raised by the call."""
+
+
+def _progress_callback(progress: Optional[Progress]) -> Optional[Callable[[int, int], object]]:
+    """The native module's `(done, total)` callback for a `progress=` argument."""
+    if progress is None:
+        return None
+    update = getattr(progress, "update", None)
+    if callable(update):
+        bar = progress
+        shown = [0]
+
+        def report(done: int, total: int) -> None:
+            if total and hasattr(bar, "total") and getattr(bar, "total") != total:
+                setattr(bar, "total", total)
+                refresh = getattr(bar, "refresh", None)
+                if callable(refresh):
+                    refresh()
+            if done > shown[0]:
+                update(done - shown[0])
+                shown[0] = done
+
+        return report
+    if callable(progress):
+        return progress
+    raise InvalidInput(
+        f"progress: expected a bar with update(n) such as tqdm.tqdm() or a callable "
+        f"(done, total), got {type(progress).__name__}"
+    )
+
+
+def compose_cells(calculus: Calculus, *, progress: Optional[Progress] = None) -> Dict[str, Dict[str, List[str]]]:
+    """The compose table of a learned (raster) calculus by Algorithm 3 over its cells (thesis
+    §3.3.3), sound for every configuration: `table[r][s]` lists the states t with
+    {DE:F} = r, {EF:G} = s ⇒ {DE:G} = t possible. A fine raster takes seconds; `progress`
+    counts cells."""
+    return _qrm.compose_cells(calculus, progress=_progress_callback(progress))
+
+
+def monte_carlo_config(*, quick: bool = False, **overrides: Any) -> types.MonteCarloConfig:
     """The Monte Carlo study's settings (thesis §2.3.1) as a dict, with overrides.
 
     Keys: sigmas, trials, samples, landmarks, world, radius, step_deg, range, calculi, floor,
@@ -83,30 +139,41 @@ def monte_carlo_config(*, quick: bool = False, **overrides: Any) -> Dict[str, An
     if unknown:
         raise InvalidInput(f"unknown study settings: {sorted(unknown)}")
     config.update(overrides)
-    return config
+    return cast(types.MonteCarloConfig, config)
 
 
-def monte_carlo_shard(config: Dict[str, Any], start: int, count: int) -> List[Dict[str, Any]]:
+def monte_carlo_shard(
+    config: Mapping[str, Any], start: int, count: int, *, progress: Optional[Progress] = None
+) -> List[types.MonteCarloRecord]:
     """Runs trials start..start+count of every noise level; returns their records.
 
     Each trial is seeded by (seed, level, trial) alone, so shards can run anywhere (processes,
     a Ray cluster) and `monte_carlo_aggregate` of all shards equals one `monte_carlo` run.
+    `progress` counts trials (one per level and trial).
     """
-    records: List[Dict[str, Any]] = json.loads(_qrm.monte_carlo_shard(json.dumps(config), start, count))
+    records: List[types.MonteCarloRecord] = json.loads(
+        _qrm.monte_carlo_shard(json.dumps(dict(config)), start, count, progress=_progress_callback(progress))
+    )
     return records
 
 
-def monte_carlo_aggregate(config: Dict[str, Any], shards: Sequence[List[Dict[str, Any]]]) -> Dict[str, Any]:
+def monte_carlo_aggregate(
+    config: Mapping[str, Any], shards: Sequence[Sequence[Mapping[str, Any]]]
+) -> types.MonteCarloResult:
     """Merges shard records (any order) into the study result."""
-    texts = [json.dumps(s) for s in shards]
-    result: Dict[str, Any] = json.loads(_qrm.monte_carlo_aggregate(json.dumps(config), texts))
+    texts = [json.dumps([dict(r) for r in s]) for s in shards]
+    result: types.MonteCarloResult = json.loads(_qrm.monte_carlo_aggregate(json.dumps(dict(config)), texts))
+    result["confusion"] = [(float(sigma), matrix) for sigma, matrix in result["confusion"]]
     return result
 
 
-def monte_carlo(config: Optional[Dict[str, Any]] = None) -> Dict[str, Any]:
+def monte_carlo(
+    config: Optional[Mapping[str, Any]] = None, *, progress: Optional[Progress] = None
+) -> types.MonteCarloResult:
     """The whole study in this process (all cores)."""
     config = config if config is not None else monte_carlo_config(quick=True)
-    return monte_carlo_aggregate(config, [monte_carlo_shard(config, 0, int(config["trials"]))])
+    shard = monte_carlo_shard(config, 0, int(config["trials"]), progress=progress)
+    return monte_carlo_aggregate(config, [shard])
 
 
 def _plain(value: Any) -> Any:
@@ -151,11 +218,15 @@ def serge(
     return _qrm.serge_run(text, mu, sigma, trials, grid, window, seed)
 
 
-def serge_cross_validate(dataset: str, *, quick: bool = True, seed: int = 0) -> List[Dict[str, Any]]:
+def serge_cross_validate(
+    dataset: str, *, quick: bool = True, seed: int = 0, progress: Optional[Progress] = None
+) -> List[types.CvRecord]:
     """The thesis's 5-fold cross-validation study (§3.4) on `well-separated`, `hallway` or
     `lab`: one record per SERGE run (sweep, mu, sigma, fold, n_regions, train_log_saliency,
-    test_log_likelihood, errors, points)."""
-    records: List[Dict[str, Any]] = json.loads(_qrm.serge_cross_validate(dataset, quick, seed))
+    test_log_likelihood, errors, points). `progress` counts SERGE runs."""
+    records: List[types.CvRecord] = json.loads(
+        _qrm.serge_cross_validate(dataset, quick, seed, progress=_progress_callback(progress))
+    )
     return records
 
 
@@ -172,7 +243,7 @@ def navigate(
     controller: str = "arc",
     horizon: int = 4,
     replan: bool = True,
-) -> Dict[str, Any]:
+) -> types.NavOutcome:
     """Q-Link from landmark `start` to landmark `goal` (thesis chapter 4).
 
     The world is point landmarks at `positions` seen within `range`. The map is `pqrm` (a
@@ -184,27 +255,41 @@ def navigate(
     """
     calc = Calculus.builtin(calculus) if isinstance(calculus, str) else calculus
     pos = {int(k): (float(v[0]), float(v[1])) for k, v in positions.items()}
-    out: Dict[str, Any] = json.loads(
+    out: types.NavOutcome = json.loads(
         _qrm.navigate(pos, start, goal, pqrm=pqrm, calculus=calc, range=range, map_range=map_range,
                       beta=beta, controller=controller, horizon=horizon, replan=replan)
     )
     return out
 
 
-def qlink_field(*, quick: bool = True, trials: Optional[int] = None, seed: int = 0) -> Dict[str, Any]:
+def qlink_field(
+    *, quick: bool = True, trials: Optional[int] = None, seed: int = 0, progress: Optional[Progress] = None
+) -> types.FieldExperiment:
     """The §4.4.2 field experiment in one world: a lidar-only hybrid map of the simulated
     field site and random start/goal trials for the thesis's set-up and its improvements.
     Returns `{"mapping", "draws", "variants", "trials"}` (success rates and failure causes
-    per variant in "variants")."""
+    per variant in "variants"). `progress` counts trials (the mapping drive comes first)."""
     if trials is not None and trials < 1:
         raise InvalidInput(f"trials = {trials}: at least 1")
-    result: Dict[str, Any] = json.loads(_qrm.qlink_field(quick, trials, seed))
+    result: types.FieldExperiment = json.loads(_qrm.qlink_field(quick, trials, seed, progress=_progress_callback(progress)))
+    for v in result["variants"]:
+        v["by_plan_len"] = [(int(n), int(k), float(m)) for n, k, m in v["by_plan_len"]]
     return result
 
 
-def qlink_study(trial: str = "all", *, quick: bool = True, pairs: Optional[int] = None, seed: int = 0) -> Dict[str, Any]:
-    """The §4.4.1 study (Table 4.1): `{"table": [...], "records": [...]}`."""
-    result: Dict[str, Any] = json.loads(_qrm.qlink_study(trial, quick, pairs, seed))
+def qlink_study(
+    trial: str = "all",
+    *,
+    quick: bool = True,
+    pairs: Optional[int] = None,
+    seed: int = 0,
+    progress: Optional[Progress] = None,
+) -> types.QlinkStudy:
+    """The §4.4.1 study (Table 4.1): `{"table": [...], "records": [...]}`. `progress` counts
+    navigations."""
+    result: types.QlinkStudy = json.loads(
+        _qrm.qlink_study(trial, quick, pairs, seed, progress=_progress_callback(progress))
+    )
     return result
 
 

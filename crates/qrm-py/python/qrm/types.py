@@ -1,17 +1,56 @@
 """The shapes of the dicts qrm returns, for type checkers (`mypy --strict` accepts
-`m.update(f["t"], f["ids"], f["xy"], f["cov"])` on a simulated frame).
+`m.update(f["t"], f["ids"], f["xy"], f["cov"])` on a simulated frame, and rejects a
+misspelt key of a study result).
 
-They are ordinary dicts at run time; these `TypedDict`s only say which keys they have and
-what each holds.
+They are ordinary dicts at run time (JSON-like: they pickle, `qrm.to_pandas` takes their
+record lists); these `TypedDict`s only say which keys they have and what each holds. The
+test suite checks every result's keys against them.
 """
 from __future__ import annotations
 
-from typing import Dict, List, Tuple, TypedDict
+from typing import TYPE_CHECKING, Dict, List, Literal, Optional, Tuple, TypedDict, Union
+
+if TYPE_CHECKING:  # Python 3.10+; annotations are not evaluated at run time here
+    from typing import TypeAlias
 
 import numpy as np
 import numpy.typing as npt
 
-__all__ = ["Frame", "MapMetrics", "Observations", "Truth", "UpdateReport"]
+__all__ = [
+    "Assumptions",
+    "BoundCheck",
+    "ConsistencyCheck",
+    "CvRecord",
+    "FieldExperiment",
+    "FieldMapping",
+    "FieldResult",
+    "FieldSummary",
+    "FieldTrial",
+    "FlaggedEntry",
+    "Frame",
+    "Inference",
+    "LevelSummary",
+    "MapMetrics",
+    "MeanStd",
+    "MonteCarloBaseline",
+    "MonteCarloConfig",
+    "MonteCarloRecord",
+    "MonteCarloResult",
+    "NavFailure",
+    "NavOutcome",
+    "Neighbours",
+    "Observations",
+    "QlinkRecord",
+    "QlinkStudy",
+    "QlinkTableRow",
+    "Schedule",
+    "TaskDraws",
+    "TransitionRecord",
+    "TrialMetrics",
+    "Truth",
+    "UpdateReport",
+    "WrongTriplet",
+]
 
 
 class Observations(TypedDict):
@@ -68,3 +107,351 @@ class MapMetrics(TypedDict):
 
 Truth = Dict[int, Tuple[float, float]]
 """Surveyed positions: landmark id → (x, y)."""
+
+
+class Neighbours(TypedDict):
+    """A calculus's neighbour graph (`Calculus.neighbours`, `BinaryCalculus.neighbours`)."""
+
+    states: List[str]
+    adjacent: List[Tuple[str, str]]
+    """pairs of states that touch"""
+    distance: List[List[int]]
+    """hops between states, in the order of `states`"""
+
+
+class Inference(TypedDict):
+    """A relation inferred by composition (`Pqrm.infer`)."""
+
+    p: npt.NDArray[np.float64]
+    """the inferred distribution over the calculus's states"""
+    paths: int
+    """composition paths fused"""
+    via: List[int]
+    """the landmarks the paths went through"""
+    round: int
+    """the inference round that gave it (1: from observed sets only)"""
+    alpha: float
+    """the fusion's weight"""
+
+
+class FlaggedEntry(TypedDict):
+    """A map entry whose most likely state closure contradicts."""
+
+    set: List[int]
+    state: str
+    p: float
+
+
+class ConsistencyCheck(TypedDict):
+    """The consistency check of the most likely states (`Pqrm.check`)."""
+
+    sets: int
+    consistent: bool
+    contradiction: Optional[str]
+    """why closure failed, None when it did not"""
+    flagged: List[FlaggedEntry]
+    closures: int
+
+
+# --- PQRM: the Monte Carlo study (thesis §2.3.1) ---------------------------------------
+
+
+class MonteCarloConfig(TypedDict):
+    """The study's settings (`qrm.monte_carlo_config`)."""
+
+    sigmas: List[float]
+    """range noise levels σ_r (m)"""
+    trials: int
+    samples: int
+    landmarks: int
+    world: float
+    radius: float
+    step_deg: float
+    range: float
+    calculi: List[str]
+    """the first is the finest; the others are its merges"""
+    floor: float
+    detail_sigmas: List[float]
+    seed: int
+
+
+class TrialMetrics(MapMetrics):
+    """One calculus's map after one trial."""
+
+    neighbor_histogram: List[int]
+
+
+class WrongTriplet(TypedDict):
+    """A set whose most likely state is not the true one."""
+
+    sigma_r: float
+    x: float
+    y: float
+    d_ab: float
+    truth: str
+    ml: str
+
+
+class MonteCarloRecord(TypedDict):
+    """One trial of one noise level (`qrm.monte_carlo_shard`); `metrics` per calculus, None
+    for a trial that saw no landmark set."""
+
+    level: int
+    trial: int
+    metrics: Optional[List[TrialMetrics]]
+    wrong: List[WrongTriplet]
+
+
+class MeanStd(TypedDict):
+    mean: float
+    std: float
+
+
+class LevelSummary(TypedDict):
+    """One calculus at one noise level, over the trials."""
+
+    calculus: str
+    sigma_r: float
+    sigma_n: float
+    trials: int
+    n_sets: MeanStd
+    mean_entropy: MeanStd
+    normalized_entropy: MeanStd
+    error_rate: MeanStd
+    p_ml: MeanStd
+    neighbor_distance: MeanStd
+
+
+class MonteCarloBaseline(TypedDict):
+    """What a uniform belief would score."""
+
+    error_rate: float
+    mean_neighbor_distance: float
+    p_ml: float
+    top_n_error: List[float]
+    entropy: float
+
+
+class MonteCarloResult(TypedDict):
+    """The study (`qrm.monte_carlo`, `qrm.monte_carlo_aggregate`)."""
+
+    config: MonteCarloConfig
+    levels: List[LevelSummary]
+    baselines: Dict[str, MonteCarloBaseline]
+    confusion: List[Tuple[float, List[List[int]]]]
+    """(detail σ_r, confusion matrix [true][most likely]) of the finest calculus"""
+    wrong: List[WrongTriplet]
+
+
+# --- SERGE: cross-validation (thesis §3.4) ---------------------------------------------
+
+
+class CvRecord(TypedDict):
+    """One SERGE run of the cross-validation study (`qrm.serge_cross_validate`)."""
+
+    sweep: Literal["mu", "sigma"]
+    mu: int
+    sigma: float
+    fold: int
+    n_regions: int
+    train_log_saliency: float
+    test_log_likelihood: float
+    errors: int
+    points: int
+
+
+# --- Q-Link (thesis chapter 4) ---------------------------------------------------------
+
+# A Union of one-value Literals (not one Literal of three) so that the run-time object is a
+# `typing.Union`, as stubtest expects of an alias it sees as a union.
+NavFailure: TypeAlias = Union[Literal["no-start"], Literal["no-path"], Literal["insufficient-features"]]
+"""Why a navigation failed."""
+
+
+TransitionRecord = TypedDict(
+    "TransitionRecord",
+    {
+        "from": int,
+        "to": int,
+        "link": int,
+        "commands": List[int],
+        "success": bool,
+        "length": float,
+        "end": List[float],
+    },
+)
+"""One transition of a navigation: plan element `from` to `to` through `link` (the
+functional form because `from` is a Python keyword)."""
+
+
+class NavOutcome(TypedDict):
+    """One navigation (`qrm.navigate`)."""
+
+    success: bool
+    failure: Optional[NavFailure]
+    plan_len: int
+    replans: int
+    length: float
+    transit_length: float
+    bound: float
+    """Proposition 2's bound (2π + 1)·R·|P| (m)"""
+    bound_direct: float
+    """Proposition 4's bound R·|P| (m)"""
+    trajectory: List[List[float]]
+    transitions: List[TransitionRecord]
+    plan: List[int]
+    """the first plan's map elements"""
+    searches: List[List[int]]
+    """[first, last) trajectory indices of each search"""
+
+
+class Schedule(TypedDict):
+    """When the robot senses (`"continuous"` or `{"at-stops": {"degrees": d}}`) and how many
+    fallback circles it may drive."""
+
+    sensing: Union[str, Dict[str, Dict[str, float]]]
+    fallbacks: int
+
+
+class QlinkRecord(TypedDict):
+    """One navigation of the §4.4.1 study."""
+
+    trial: Literal["sensor-range", "occlusion"]
+    value: float
+    """R'/R (sensor-range) or the landmark size in m (occlusion)"""
+    schedule: Schedule
+    start: int
+    goal: int
+    plan_len: int
+    success: bool
+    failure: Optional[NavFailure]
+    length: float
+    transit_length: float
+    bound: float
+    bound_direct: float
+
+
+class QlinkTableRow(TypedDict):
+    """One row of Table 4.1."""
+
+    trial: Literal["sensor-range", "occlusion"]
+    value: float
+    schedule: Schedule
+    pairs: int
+    no_path: int
+    failures: int
+    failure_rate: float
+    over_bound: int
+    mean_length: float
+
+
+class QlinkStudy(TypedDict):
+    """The §4.4.1 study (`qrm.qlink_study`)."""
+
+    table: List[QlinkTableRow]
+    records: List[QlinkRecord]
+
+
+class FieldMapping(TypedDict):
+    """What the lidar-only mapping drive of the field experiment saw and built."""
+
+    frames: int
+    detections: int
+    aliased_detections: int
+    mapped_ids: int
+    real_landmarks: int
+    false_landmarks: int
+    world_landmarks: int
+    point_elements: int
+    wall_elements: int
+    wall_frames: int
+    effective_range: float
+
+
+class TaskDraws(TypedDict):
+    """How the random start/goal tasks were drawn: kept, and why others were not."""
+
+    kept: int
+    no_start: int
+    no_path: int
+    trivial: int
+    blocked: int
+
+
+FieldResult: TypeAlias = Union[
+    Literal["success"],
+    Literal["perceptual-aliasing"],
+    Literal["insufficient-features"],
+    Literal["insufficient-features-and-aliasing"],
+    Literal["no-path"],
+]
+"""A field trial's outcome, by cause."""
+
+
+class Assumptions(TypedDict):
+    """Which assumptions of Propositions 2 and 4 a run meets."""
+
+    disc: bool
+    """A1 (i): every element's landmarks in a disc of radius R"""
+    circle: bool
+    """A1 (ii) + A2: a drivable circle of radius R about every link, sensing it"""
+    pairwise: bool
+    """A3 (i): landmarks pairwise within R"""
+    sight_lines: bool
+    """A3 (ii): sight of both along the line between any two"""
+    straight: bool
+    """A4: straight drives between landmarks"""
+
+
+class BoundCheck(TypedDict):
+    """Both distance bounds of one run at one R."""
+
+    range: float
+    transitions: int
+    length: float
+    prop2: float
+    prop4: float
+    assumptions: Assumptions
+
+
+class FieldTrial(TypedDict):
+    """One field trial (`qrm.qlink_field`)."""
+
+    variant: str
+    trial: int
+    start: List[float]
+    goal: int
+    result: FieldResult
+    plan_len: int
+    replans: int
+    length: float
+    final_distance: float
+    transit_length: float
+    bounds: List[BoundCheck]
+    """at the lidar's range and at the effective range"""
+
+
+class FieldSummary(TypedDict):
+    """One variant's success rate and failure causes."""
+
+    variant: str
+    trials: int
+    no_path: int
+    successes: int
+    success_rate: float
+    perceptual_aliasing: int
+    insufficient_features: int
+    insufficient_features_and_aliasing: int
+    replanned_successes: int
+    mean_length: float
+    by_plan_len: List[Tuple[int, int, float]]
+    """Table 4.2: (|P|, successful paths, mean trajectory length in m)"""
+
+
+class FieldExperiment(TypedDict):
+    """The field experiment in one world (`qrm.qlink_field`)."""
+
+    mapping: FieldMapping
+    draws: TaskDraws
+    variants: List[FieldSummary]
+    trials: List[FieldTrial]
