@@ -111,3 +111,64 @@ def test_ids_that_are_not_integers_are_refused_by_name(edc, ids, words):
         m.update(0.0, ids, np.zeros((3, 2)), np.ones((3, 3)))
     for w in words:
         assert w in str(e.value), (w, str(e.value))
+
+
+def test_classify_columns_gives_the_rows_answer_for_contiguous_strided_and_listed_columns(edc):
+    """Issue 16: a columns (SoA) entry point, how a data frame or a sampler holds triplets."""
+    t = np.random.default_rng(4).uniform(0.0, 100.0, size=(50_000, 6))
+    want = edc.classify(t)
+    soa = [np.ascontiguousarray(t[:, j]) for j in range(6)]
+    assert np.array_equal(edc.classify_columns(*soa), want)
+    assert np.array_equal(edc.classify_columns(*(t[:, j] for j in range(6))), want)  # strided
+    out = np.empty(len(t), dtype=np.int64)
+    assert edc.classify_columns(*soa, out=out) is out
+    assert np.array_equal(out, want)
+    small = [list(c[:3]) for c in soa]
+    assert edc.classify_columns(*small).tolist() == want[:3].tolist()
+    assert edc.classify_columns(*(c.astype(np.float32) for c in soa)).shape == (len(t),)
+
+
+def test_classify_columns_names_the_column_and_the_first_bad_row(edc):
+    cols = [np.zeros(10), np.zeros(10), np.zeros(10), np.ones(10), np.ones(10), np.ones(10)]
+    with pytest.raises(qrm.InvalidInput, match="cy has 9"):
+        edc.classify_columns(*cols[:5], np.ones(9))
+    bad = [c.copy() for c in cols]
+    bad[4][7] = np.nan
+    bad[4][8] = np.nan
+    with pytest.raises(qrm.InvalidInput, match="row 7"):
+        edc.classify_columns(*bad)
+    coincident = [c.copy() for c in cols]
+    coincident[3][2] = 0.0  # B = A in row 2
+    with pytest.raises(qrm.DegenerateFrame, match="row 2"):
+        edc.classify_columns(*coincident)
+    with pytest.raises(TypeError, match="ax: expected a 1-D array"):
+        edc.classify_columns(np.zeros((2, 2)), *cols[1:])
+    binary = next(n for n in qrm.builtin_names() if qrm.Calculus.builtin(n).frame != "ternary")
+    with pytest.raises(qrm.InvalidInput, match="not ternary"):
+        qrm.Calculus.builtin(binary).classify_columns(*cols)
+
+
+def test_large_classifications_do_not_depend_on_the_thread_count(tmp_path):
+    """`classify` and `classify_columns` split large inputs over the worker threads; every id
+    depends on its row alone, so one thread gives the same array."""
+    import subprocess
+    import sys
+
+    code = (
+        "import numpy as np, qrm, hashlib\n"
+        "t = np.random.default_rng(9).uniform(0, 100, size=(300_000, 6))\n"
+        "e = qrm.Calculus.builtin('edc')\n"
+        "a = e.classify(t); b = e.classify_columns(*(t[:, j] for j in range(6)))\n"
+        "assert (a == b).all()\n"
+        "print(qrm.worker_threads(), hashlib.sha256(a.tobytes()).hexdigest())\n"
+    )
+    import os
+
+    runs = {}
+    for threads in ("1", "2"):
+        r = subprocess.run([sys.executable, "-c", code], env=dict(os.environ, RAYON_NUM_THREADS=threads),
+                           capture_output=True, text=True, check=True)
+        n, digest = r.stdout.split()
+        assert n == threads
+        runs[threads] = digest
+    assert runs["1"] == runs["2"]

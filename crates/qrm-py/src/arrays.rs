@@ -66,6 +66,30 @@ fn shape_text(shape: &[usize]) -> String {
     }
 }
 
+/// `np.asarray(obj).astype(float64)` when it holds real numbers (an empty array holds no
+/// other kind) in `ndim` dimensions; otherwise a TypeError saying `expected` and what came.
+fn floats_nd<'py>(
+    obj: &Bound<'py, PyAny>,
+    expected: &str,
+    ndim: usize,
+) -> PyResult<Bound<'py, PyAny>> {
+    let (array, kind, shape) = as_array(obj.as_borrowed(), expected)?;
+    let empty = shape.iter().product::<usize>() == 0;
+    if !(matches!(kind.as_str(), "f" | "i" | "u") || empty) {
+        return Err(PyTypeError::new_err(format!(
+            "{expected}, got dtype {}",
+            dtype_name(&array)
+        )));
+    }
+    if shape.len() != ndim {
+        return Err(PyTypeError::new_err(format!(
+            "{expected}, got shape {}",
+            shape_text(&shape)
+        )));
+    }
+    array.call_method1("astype", ("float64",))
+}
+
 /// Argument `arg` as a 2-D float64 array (shape `(n, k)`), from anything NumPy reads as
 /// real numbers.
 pub(crate) fn floats2<'py>(
@@ -76,21 +100,22 @@ pub(crate) fn floats2<'py>(
         return Ok(a.try_readonly()?);
     }
     let expected = format!("{arg}: expected a 2-D array of real numbers, shape (n, k)");
-    let (array, kind, shape) = as_array(obj.as_borrowed(), &expected)?;
-    if !matches!(kind.as_str(), "f" | "i" | "u") {
-        return Err(PyTypeError::new_err(format!(
-            "{expected}, got dtype {}",
-            dtype_name(&array)
-        )));
-    }
-    if shape.len() != 2 {
-        return Err(PyTypeError::new_err(format!(
-            "{expected}, got shape {}",
-            shape_text(&shape)
-        )));
-    }
-    let converted = array.call_method1("astype", ("float64",))?;
+    let converted = floats_nd(obj, &expected, 2)?;
     Ok(converted.cast_into::<PyArray2<f64>>()?.try_readonly()?)
+}
+
+/// Argument `arg` as a 1-D float64 array (shape `(n,)`), from anything NumPy reads as real
+/// numbers (a column of a data frame, a float32 array, a list).
+pub(crate) fn floats1<'py>(
+    obj: &Bound<'py, PyAny>,
+    arg: &str,
+) -> PyResult<PyReadonlyArray1<'py, f64>> {
+    if let Ok(a) = obj.cast::<PyArray1<f64>>() {
+        return Ok(a.try_readonly()?);
+    }
+    let expected = format!("{arg}: expected a 1-D array of real numbers, shape (n,)");
+    let converted = floats_nd(obj, &expected, 1)?;
+    Ok(converted.cast_into::<PyArray1<f64>>()?.try_readonly()?)
 }
 
 /// Argument `arg` as a 1-D int64 array (shape `(n,)`), from anything NumPy reads as integers.

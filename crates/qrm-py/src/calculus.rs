@@ -2,9 +2,10 @@
 
 use std::collections::BTreeMap;
 
-use numpy::{IntoPyArray, PyArray1, PyArrayMethods, PyReadonlyArray2};
+use numpy::{IntoPyArray, PyArray1, PyArrayMethods, PyReadonlyArray2, PyUntypedArrayMethods};
 use pyo3::prelude::*;
 use qsr_core::{ComposeOptions, Permutation, StateId};
+use rayon::prelude::*;
 
 use crate::errors::{invalid, qsr};
 
@@ -69,27 +70,68 @@ impl Calculus {
     }
 }
 
-/// Classifies rows into `dst` through a small id buffer (cache-resident), widening to i64 as it
-/// goes: one pass over the output, as the Rust API's caller-provided buffer.
+/// Ids per parallel work item: a cache-resident id buffer, and enough items that both cores
+/// stay busy on inputs of a few hundred thousand triplets.
+const CHUNK: usize = 4096;
+
+/// Classifies rows into `dst`, chunks in parallel (each through a small id buffer, widened to
+/// i64 as it goes: one pass over the output). Every id depends on its row alone, so the result
+/// does not depend on the thread count.
 fn classify_into(
     calc: &qsr_core::Calculus,
     rows: &[[f64; 6]],
     dst: &mut [i64],
 ) -> Result<(), qsr_core::QsrError> {
-    const CHUNK: usize = 4096;
-    let mut buf = [StateId(0); CHUNK];
-    for (ci, (r, d)) in rows.chunks(CHUNK).zip(dst.chunks_mut(CHUNK)).enumerate() {
-        let b = &mut buf[..r.len()];
-        if calc.classify_triplets(r, b).is_err() {
-            // Report the first bad row with its index in the whole array.
-            for (i, row) in r.iter().enumerate() {
-                calc.classify_row(row)
-                    .map_err(|e| annotate(ci * CHUNK + i, e))?;
+    let all_valid: Result<(), ()> = rows
+        .par_chunks(CHUNK)
+        .zip(dst.par_chunks_mut(CHUNK))
+        .try_for_each(|(r, d)| {
+            let mut buf = [StateId(0); CHUNK];
+            let b = &mut buf[..r.len()];
+            calc.classify_triplets(r, b).map_err(|_| ())?;
+            for (o, s) in d.iter_mut().zip(b.iter()) {
+                *o = i64::from(s.0);
             }
-        }
-        for (o, s) in d.iter_mut().zip(b.iter()) {
-            *o = i64::from(s.0);
-        }
+            Ok(())
+        });
+    if all_valid.is_err() {
+        // Whichever worker met a bad row, report the first one of the whole array.
+        return classify_each(calc, rows.len(), |i| rows[i], dst);
+    }
+    Ok(())
+}
+
+/// Fills `out` (or a new int64 array of length `n`) through `fill`, run with the interpreter
+/// released in this process's pool.
+fn write_ids<'py>(
+    py: Python<'py>,
+    out: Option<Bound<'py, PyArray1<i64>>>,
+    n: usize,
+    fill: impl FnOnce(&mut [i64]) -> Result<(), qsr_core::QsrError> + Send,
+) -> PyResult<Bound<'py, PyArray1<i64>>> {
+    let target = match out {
+        Some(o) => o,
+        None => PyArray1::<i64>::zeros(py, n, false),
+    };
+    {
+        let mut rw = target.try_readwrite()?;
+        let dst = rw
+            .as_slice_mut()
+            .map_err(|e| invalid(format!("out must be contiguous: {e}")))?;
+        crate::pool::detach(py, || fill(dst)).map_err(qsr)?;
+    }
+    Ok(target)
+}
+
+/// Row by row, failing on the first bad row with its index: the slow path that names it.
+fn classify_each(
+    calc: &qsr_core::Calculus,
+    n: usize,
+    row: impl Fn(usize) -> [f64; 6],
+    dst: &mut [i64],
+) -> Result<(), qsr_core::QsrError> {
+    for (i, d) in dst.iter_mut().enumerate().take(n) {
+        *d = i64::from(calc.classify_row(&row(i)).map_err(|e| annotate(i, e))?.0);
     }
     Ok(())
 }
@@ -212,20 +254,87 @@ impl Calculus {
                 }
             };
         };
-        let target = match out {
-            Some(o) => o,
-            None => PyArray1::<i64>::zeros(py, n, false),
-        };
-        {
-            let mut rw = target.try_readwrite()?;
-            let dst = rw
-                .as_slice_mut()
-                .map_err(|e| invalid(format!("out must be contiguous: {e}")))?;
-            let (rows, _) = flat.as_chunks::<6>();
-            let calc = &self.inner;
-            crate::pool::detach(py, || classify_into(calc, rows, dst)).map_err(qsr)?;
+        let (rows, _) = flat.as_chunks::<6>();
+        let calc = &self.inner;
+        write_ids(py, out, n, |dst| classify_into(calc, rows, dst))
+    }
+
+    /// State ids of n ternary configurations given as six columns (a = (ax, ay), b, c; each
+    /// of length n): how data often arrives — columns of a data frame, the samples of a
+    /// filter — read in place when they are contiguous float64, with no (n, 6) array built.
+    /// `out` as in `classify`.
+    #[pyo3(signature = (ax, ay, bx, by, cx, cy, *, out = None))]
+    #[allow(clippy::too_many_arguments)] // the six columns of a ternary configuration
+    fn classify_columns<'py>(
+        &self,
+        py: Python<'py>,
+        ax: Bound<'py, PyAny>,
+        ay: Bound<'py, PyAny>,
+        bx: Bound<'py, PyAny>,
+        by: Bound<'py, PyAny>,
+        cx: Bound<'py, PyAny>,
+        cy: Bound<'py, PyAny>,
+        out: Option<Bound<'py, PyAny>>,
+    ) -> PyResult<Bound<'py, PyArray1<i64>>> {
+        if self.inner.frame().input_len() != 6 {
+            return Err(invalid(format!(
+                "classify_columns: calculus `{}` is not ternary; use classify with rows",
+                self.inner.name()
+            )));
         }
-        Ok(target)
+        let names = ["ax", "ay", "bx", "by", "cx", "cy"];
+        let arrays = [&ax, &ay, &bx, &by, &cx, &cy]
+            .iter()
+            .zip(names)
+            .map(|(a, name)| crate::arrays::floats1(a, name))
+            .collect::<PyResult<Vec<_>>>()?;
+        let n = arrays[0].len();
+        if let Some((name, a)) = names.iter().zip(&arrays).find(|(_, a)| a.len() != n) {
+            return Err(invalid(format!(
+                "classify_columns: ax has {n} values but {name} has {}",
+                a.len()
+            )));
+        }
+        // In place when contiguous; a strided column (e.g. `t[:, 0]`) is copied once.
+        let cols: Vec<std::borrow::Cow<'_, [f64]>> = arrays
+            .iter()
+            .map(|a| {
+                a.as_slice().map_or_else(
+                    |_| std::borrow::Cow::Owned(a.as_array().to_vec()),
+                    std::borrow::Cow::Borrowed,
+                )
+            })
+            .collect();
+        let out = out.map(|o| crate::arrays::out_ids(o, n)).transpose()?;
+        let calc = &self.inner;
+        let c = &cols;
+        let row = |i: usize| [c[0][i], c[1][i], c[2][i], c[3][i], c[4][i], c[5][i]];
+        write_ids(py, out, n, |dst| {
+            let all_valid: Result<(), ()> =
+                dst.par_chunks_mut(CHUNK)
+                    .enumerate()
+                    .try_for_each(|(k, d)| {
+                        let r = k * CHUNK..k * CHUNK + d.len();
+                        let col = |j: usize| &c[j][r.clone()];
+                        let mut buf = [StateId(0); CHUNK];
+                        let b = &mut buf[..d.len()];
+                        calc.classify_columns(
+                            (col(0), col(1)),
+                            (col(2), col(3)),
+                            (col(4), col(5)),
+                            b,
+                        )
+                        .map_err(|_| ())?;
+                        for (o, s) in d.iter_mut().zip(b.iter()) {
+                            *o = i64::from(s.0);
+                        }
+                        Ok(())
+                    });
+            match all_valid {
+                Ok(()) => Ok(()),
+                Err(()) => classify_each(calc, n, row, dst),
+            }
+        })
     }
 
     /// Labels of classified configurations (see `classify`).
