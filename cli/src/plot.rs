@@ -444,6 +444,26 @@ where
     Ok((chart, hx))
 }
 
+/// [`world_chart`] with its axes drawn, and the pixels per metre (for discs drawn to scale).
+fn world_axes<'a, DB: DrawingBackend>(
+    area: &'a DrawingArea<DB, Shift>,
+    title: &str,
+    w: &sim2d::WorldSpec,
+) -> std::result::Result<(MetreChart<'a, DB>, f64), DrawingAreaErrorKind<DB::ErrorType>>
+where
+    DB::ErrorType: 'static,
+{
+    let (mut chart, hx) = world_chart(area, title, w)?;
+    chart
+        .configure_mesh()
+        .x_desc("x (m)")
+        .y_desc("y (m)")
+        .light_line_style(WHITE)
+        .draw()?;
+    let px_per_m = f64::from(area.dim_in_pixel().0.saturating_sub(60)) / (2.0 * hx);
+    Ok((chart, px_per_m))
+}
+
 fn draw_scenario<DB: DrawingBackend>(
     root: &DrawingArea<DB, Shift>,
     title: &str,
@@ -455,14 +475,7 @@ where
     DB::ErrorType: 'static,
 {
     root.fill(&WHITE)?;
-    let (mut chart, hx) = world_chart(root, title, w)?;
-    chart
-        .configure_mesh()
-        .x_desc("x (m)")
-        .y_desc("y (m)")
-        .light_line_style(WHITE)
-        .draw()?;
-    let px_per_m = f64::from(root.dim_in_pixel().0.saturating_sub(60)) / (2.0 * hx);
+    let (mut chart, px_per_m) = world_axes(root, title, w)?;
     let disc = |r: f64| ((r * px_per_m).round() as i32).max(2);
     chart.draw_series(rays.iter().map(|(a, b)| {
         PathElement::new(
@@ -926,14 +939,7 @@ where
         root.split_horizontally(w_px)
     };
     let w = p.world;
-    let (mut chart, hx) = world_chart(&left, &p.title, w)?;
-    chart
-        .configure_mesh()
-        .x_desc("x (m)")
-        .y_desc("y (m)")
-        .light_line_style(WHITE)
-        .draw()?;
-    let px_per_m = f64::from(left.dim_in_pixel().0.saturating_sub(60)) / (2.0 * hx);
+    let (mut chart, px_per_m) = world_axes(&left, &p.title, w)?;
     let disc = |r: f64| ((r * px_per_m).round() as i32).max(2);
     let pt = |q: &[f64; 2]| (q[0], q[1]);
     chart.draw_series(
