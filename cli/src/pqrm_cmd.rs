@@ -16,7 +16,9 @@ use pqrm::{Orderings, Pqrm, PqrmConfig, evaluate};
 use qsr_core::Calculus;
 use serde_json::json;
 
-use crate::args::{CalibrateArgs, MapArgs, MergeArgs, PqrmCmd, RealArgs, StudyArgs};
+use crate::args::{
+    CalibrateArgs, MapArgs, MapFormatArg, MergeArgs, OrderingsArg, PqrmCmd, RealArgs, StudyArgs,
+};
 use crate::output::{CsvTable, Staging, write_atomic};
 use crate::plot::{self, Series};
 
@@ -149,17 +151,13 @@ pub(crate) fn resolve_noise(
 
 /// `qrm map`.
 pub fn map(a: MapArgs) -> Result<()> {
-    let orderings = match a.orderings.as_str() {
-        "all" => Orderings::All,
-        "canonical" => Orderings::Canonical,
-        o => bail!("unknown --orderings `{o}` (all, canonical)"),
-    };
     let calc = Calculus::resolve(&a.calculus)
         .with_context(|| format!("loading calculus `{}`", a.calculus))?;
-    let config = PqrmConfig {
+    let mut config = PqrmConfig {
         samples: a.samples,
         floor: a.floor,
-        orderings,
+        // resolved below, once the recording is read (`--orderings auto` depends on it)
+        orderings: Orderings::All,
         seed: a.seed,
         sensor: pqrm::sensor::SensorModel::parse(&a.sensor)?,
         temper: 1.0,
@@ -221,6 +219,17 @@ pub fn map(a: MapArgs) -> Result<()> {
         }
         data.scans.retain(|s| a.robots.contains(&s.robot));
     }
+    // One choice for the whole recording, so that per-robot maps can be merged.
+    let possible = crate::args::possible_ordered_sets(&data.scans);
+    config.orderings = a.orderings.resolve(possible);
+    if a.orderings == OrderingsArg::Auto && config.orderings == Orderings::Canonical {
+        eprintln!(
+            "note: the recording could give {possible} ordered landmark sets (more than {}); \
+             recording one ordering per unordered set, the other five derived on reading \
+             (--orderings all to record all six)",
+            OrderingsArg::AUTO_CANONICAL_ABOVE
+        );
+    }
     // What the log reader did goes into every summary.
     let mut extra = serde_json::Map::new();
     if let Some(fit) = &noise_fit {
@@ -271,7 +280,7 @@ pub fn map(a: MapArgs) -> Result<()> {
                 &dir,
                 &one,
                 &calc,
-                (config, temper),
+                (config, temper, a.map_format),
                 &extra,
                 &format!("mapping robot {r}"),
             )?;
@@ -279,7 +288,14 @@ pub fn map(a: MapArgs) -> Result<()> {
         }
         serde_json::Value::Object(all)
     } else {
-        map_into(&out_dir, &data, &calc, (config, temper), &extra, "mapping")?
+        map_into(
+            &out_dir,
+            &data,
+            &calc,
+            (config, temper, a.map_format),
+            &extra,
+            "mapping",
+        )?
     };
     // Committed before printing: a closed pipe must not lose the result.
     stage.commit()?;
@@ -328,12 +344,13 @@ fn resolve_temper(
     }
 }
 
-/// Maps `data` into `dir`: `map.json` and `summary.json` (scored when the data has a truth).
+/// Maps `data` into `dir`: `map.json` (or `map.pqrm`) and `summary.json` (scored when the
+/// data has a truth).
 fn map_into(
     dir: &Path,
     data: &Dataset,
     calc: &Calculus,
-    (config, temper): (PqrmConfig, TemperChoice),
+    (config, temper, map_format): (PqrmConfig, TemperChoice, MapFormatArg),
     extra: &serde_json::Map<String, serde_json::Value>,
     label: &str,
 ) -> Result<serde_json::Value> {
@@ -346,7 +363,11 @@ fn map_into(
         pb.inc(1);
     }
     pb.finish_and_clear();
-    map.save(&dir.join("map.json"))?;
+    let map_format = map_format.resolve(map.len());
+    let map_file = format!("map.{}", map_format.extension());
+    let saving = Instant::now();
+    map.save_as(&dir.join(&map_file), map_format)?;
+    let save_seconds = saving.elapsed().as_secs_f64();
     let robots: std::collections::BTreeSet<u32> = data.scans.iter().map(|s| s.robot).collect();
     let mut summary = json!({
         "calculus": map.calculus().name(),
@@ -356,8 +377,12 @@ fn map_into(
         "sensor": config.sensor,
         "temper": config.temper,
         "samples": config.samples,
+        "orderings": config.orderings,
         "skipped_measurements": data.skipped,
         "n_sets": map.len(),
+        "map_file": map_file,
+        "map_bytes_in_memory": map.heap_bytes(),
+        "save_seconds": save_seconds,
         "mean_entropy": map.mean_entropy(),
         "seconds": start.elapsed().as_secs_f64(),
     });
@@ -471,7 +496,10 @@ fn merge(a: MergeArgs) -> Result<()> {
         let obj = summary.as_object_mut().context("summary is an object")?;
         score_into(obj, &evaluate(&merged, truth)?);
     }
-    write_atomic(&a.out, merged.to_json()?.as_bytes())?;
+    // binary for a `.pqrm` path, JSON otherwise; atomic either way
+    merged
+        .save(&a.out)
+        .with_context(|| format!("writing {}", a.out.display()))?;
     outln!("{}", serde_json::to_string_pretty(&summary)?)?;
     Ok(())
 }

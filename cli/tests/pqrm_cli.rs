@@ -814,3 +814,69 @@ fn map_chooses_tau_from_the_data_and_sees_through_repeated_frames() {
     assert!(String::from_utf8_lossy(&o.stderr).contains("temper must be in (0, 1]"));
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// A recording of one scan that sees `n` landmarks on a jittered grid, σ = 0.3 m.
+fn one_scan_csv(path: &Path, n: usize) {
+    let mut csv = String::from("t,robot,landmark,x,y,cxx,cxy,cyy\n");
+    for i in 0..n {
+        let (x, y) = (
+            (i % 9) as f64 * 4.0,
+            (i / 9) as f64 * 4.0 + 0.37 * (i % 3) as f64,
+        );
+        csv.push_str(&format!("0,1,{i},{x},{y},0.09,0,0.09\n"));
+    }
+    std::fs::write(path, csv).unwrap();
+}
+
+#[test]
+fn large_recordings_record_canonical_orderings_and_say_so() {
+    let dir = tmp("orderings");
+    let rec = dir.join("many.csv");
+    // 66 landmarks could give 66·65·64 = 274,560 ordered sets: above the auto threshold.
+    one_scan_csv(&rec, 66);
+    let map = |orderings: &str, out: &Path| {
+        let o = qrm(
+            &[
+                "map",
+                "--format",
+                "csv",
+                "--input",
+                rec.to_str().unwrap(),
+                "--samples",
+                "20",
+                "--orderings",
+                orderings,
+                "--out",
+                out.to_str().unwrap(),
+            ],
+            "",
+        );
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let s: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap())
+                .unwrap();
+        (s, String::from_utf8_lossy(&o.stderr).into_owned())
+    };
+    let (s, stderr) = map("auto", &dir.join("auto"));
+    assert_eq!(s["orderings"], "canonical", "{s}");
+    assert_eq!(
+        s["n_sets"],
+        66 * 65 * 64 / 6,
+        "one set per unordered triplet"
+    );
+    assert!(
+        stderr.contains("274560 ordered landmark sets") && stderr.contains("--orderings all"),
+        "the choice is said: {stderr}"
+    );
+    // Asked for explicitly, all six orderings are recorded, and nothing is noted.
+    let (s, stderr) = map("all", &dir.join("all"));
+    assert_eq!(s["orderings"], "all");
+    assert_eq!(s["n_sets"], 66 * 65 * 64);
+    assert!(!stderr.contains("note:"), "{stderr}");
+    // Small recordings keep the thesis's six orderings under auto.
+    one_scan_csv(&rec, 12);
+    let (s, _) = map("auto", &dir.join("small"));
+    assert_eq!(s["orderings"], "all");
+    assert_eq!(s["n_sets"], 12 * 11 * 10);
+    std::fs::remove_dir_all(&dir).ok();
+}

@@ -52,6 +52,30 @@ def test_a_map_pickles_with_every_belief():
     assert all(np.allclose(n.belief(s), m.belief(s), atol=1e-12) for s in m.sets()[:50])
 
 
+def test_a_map_in_the_binary_format_is_the_same_map(tmp_path):
+    m = small_map()
+    data = m.to_bytes()
+    assert data[:8] == b"QRM-PQRM"
+    n = qrm.Pqrm.from_bytes(data)
+    assert n.sets() == m.sets()
+    m.save(str(tmp_path / "map.pqrm"))
+    m.save(str(tmp_path / "map.json"))
+    b, j = qrm.Pqrm.load(str(tmp_path / "map.pqrm")), qrm.Pqrm.load(str(tmp_path / "map.json"))
+    assert (tmp_path / "map.pqrm").read_bytes()[:8] == b"QRM-PQRM"
+    assert (tmp_path / "map.pqrm").stat().st_size < (tmp_path / "map.json").stat().st_size
+    for s in m.sets():
+        assert np.array_equal(n.belief(s), m.belief(s))
+        assert np.array_equal(b.belief(s), j.belief(s))
+        assert abs(m.belief(s).sum() - 1.0) < 1e-12
+    # a damaged map is refused with the field named, never half-read
+    broken = bytearray(data)
+    broken[len(broken) // 2] ^= 0x10
+    with pytest.raises(qrm.FormatError, match="checksum|CRC"):
+        qrm.Pqrm.from_bytes(bytes(broken))
+    with pytest.raises(qrm.FormatError):
+        qrm.Pqrm.from_bytes(data[: len(data) - 3])
+
+
 def test_a_salient_region_map_pickles():
     beliefs = [{"mean": [float(i % 3), float(i // 3)], "cov": [[0.05, 0.0], [0.0, 0.05]]} for i in range(6)]
     m = qrm.serge(beliefs, 3, sigma=0.0, trials=20, grid=24, seed=1)

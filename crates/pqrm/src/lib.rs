@@ -45,6 +45,7 @@ pub mod error;
 pub mod likelihood;
 pub mod loaders;
 pub mod map;
+pub mod map_file;
 pub mod metrics;
 pub mod observation;
 pub mod reason;
@@ -52,6 +53,7 @@ pub mod reason_study;
 pub mod robots;
 pub mod sampler;
 pub mod sensor;
+mod store;
 pub mod study;
 pub mod temper;
 

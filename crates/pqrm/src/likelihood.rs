@@ -92,8 +92,136 @@ pub fn set_counts(
     Ok(counts)
 }
 
-/// Histograms of one step: each landmark set with its state counts.
-pub type StepCounts = Vec<(LandmarkSet, Vec<u32>)>;
+/// Histograms of one step: each landmark set with its state counts, in one flat table
+/// (`n_states` counts per set) so that a step over a million sets is two allocations, not a
+/// million.
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+pub struct StepCounts {
+    n_states: usize,
+    sets: Vec<LandmarkSet>,
+    counts: Vec<u32>,
+}
+
+impl StepCounts {
+    /// No sets, histograms of `n_states` bins.
+    #[must_use]
+    pub fn new(n_states: usize) -> Self {
+        Self {
+            n_states,
+            sets: Vec::new(),
+            counts: Vec::new(),
+        }
+    }
+
+    /// Histograms given set by set.
+    ///
+    /// # Errors
+    /// [`PqrmError::Mismatch`] when a histogram does not have `n_states` bins.
+    pub fn from_pairs<'a>(
+        n_states: usize,
+        pairs: impl IntoIterator<Item = (LandmarkSet, &'a [u32])>,
+    ) -> Result<Self> {
+        let mut out = Self::new(n_states);
+        for (set, c) in pairs {
+            out.push(set, c)?;
+        }
+        Ok(out)
+    }
+
+    /// Histograms given as `(set, counts)` pairs, the number of states taken from the first
+    /// (a convenience for tests and hand-made evidence).
+    ///
+    /// # Errors
+    /// [`PqrmError::Mismatch`] when the histograms differ in length.
+    pub fn from_vecs(pairs: &[(LandmarkSet, Vec<u32>)]) -> Result<Self> {
+        let q = pairs.first().map_or(0, |(_, c)| c.len());
+        Self::from_pairs(q, pairs.iter().map(|(s, c)| (*s, c.as_slice())))
+    }
+
+    /// Appends one set's histogram.
+    ///
+    /// # Errors
+    /// [`PqrmError::Mismatch`] when it does not have `n_states` bins.
+    pub fn push(&mut self, set: LandmarkSet, counts: &[u32]) -> Result<()> {
+        if counts.len() != self.n_states {
+            return Err(PqrmError::Mismatch(format!(
+                "set {:?}: {} counts for a {}-state calculus",
+                set.ids(),
+                counts.len(),
+                self.n_states
+            )));
+        }
+        self.sets.push(set);
+        self.counts.extend_from_slice(counts);
+        Ok(())
+    }
+
+    /// Bins per histogram.
+    #[must_use]
+    pub fn n_states(&self) -> usize {
+        self.n_states
+    }
+
+    /// Number of sets.
+    #[must_use]
+    pub fn len(&self) -> usize {
+        self.sets.len()
+    }
+
+    /// Whether no set was observed.
+    #[must_use]
+    pub fn is_empty(&self) -> bool {
+        self.sets.is_empty()
+    }
+
+    /// The sets, in order.
+    #[must_use]
+    pub fn sets(&self) -> &[LandmarkSet] {
+        &self.sets
+    }
+
+    /// The histogram of the `i`-th set.
+    #[must_use]
+    pub fn counts(&self, i: usize) -> &[u32] {
+        &self.counts[i * self.n_states..(i + 1) * self.n_states]
+    }
+
+    /// Sets with their histograms, in order.
+    pub fn iter(&self) -> impl ExactSizeIterator<Item = (LandmarkSet, &[u32])> + '_ {
+        // `max(1)`: a zero-state table has no bins to chunk (and no sets either)
+        self.sets
+            .iter()
+            .copied()
+            .zip(self.counts.chunks_exact(self.n_states.max(1)))
+    }
+
+    /// The same sets with their counts summed into a coarser calculus.
+    #[must_use]
+    pub fn merged(&self, merge: &MergeMap) -> Self {
+        let mut counts = vec![0u32; self.sets.len() * merge.n_coarse()];
+        for (out, (_, c)) in counts
+            .chunks_exact_mut(merge.n_coarse().max(1))
+            .zip(self.iter())
+        {
+            for (n, s) in c.iter().zip(merge.as_slice()) {
+                out[s.index()] += n;
+            }
+        }
+        Self {
+            n_states: merge.n_coarse(),
+            sets: self.sets.clone(),
+            counts,
+        }
+    }
+}
+
+impl<'a> IntoIterator for &'a StepCounts {
+    type Item = (LandmarkSet, &'a [u32]);
+    type IntoIter = Box<dyn ExactSizeIterator<Item = (LandmarkSet, &'a [u32])> + 'a>;
+    fn into_iter(self) -> Self::IntoIter {
+        Box::new(self.iter())
+    }
+}
 
 /// Samples processed per inner block of [`step_counts`].
 const CHUNK: usize = 256;
@@ -113,9 +241,9 @@ const CHUNK: usize = 256;
 /// | `{j, k : i}` (homing) | `(x/m, (1 − y)/m)` |
 /// | `{k, j : i}` (homing-inverse) | `(−x/m, (n − y)/m)` |
 ///
-/// so a step costs one frame per unordered triplet instead of six. Parallel over the first
-/// two landmarks; the result does not depend on the thread count. Sets come out grouped by
-/// unordered triplet, in the order of the table.
+/// so a step costs one frame per unordered triplet instead of six. Parallel over the pairs
+/// `(i, j)`, each writing its own slice of one preallocated table; the result does not depend
+/// on the thread count. Sets come out grouped by unordered triplet, in the order of the table.
 ///
 /// # Errors
 /// [`PqrmError::CoincidentLandmarks`] when two landmarks of a triplet coincide in a sample
@@ -127,48 +255,131 @@ pub fn step_counts(
 ) -> Result<StepCounts> {
     let ids = samples.ids();
     let m = ids.len();
-    // the keys' state table is built once per step, not per triplet
-    let forms = match orderings {
-        Orderings::All => SixForms::new(calculus),
-        Orderings::Canonical => None,
+    let q = calculus.n_states();
+    let n_orders = match orderings {
+        Orderings::All => 6,
+        Orderings::Canonical => 1,
     };
+    // the keys' state table is built once per step, not per triplet
+    let forms = SixForms::new(calculus, n_orders);
     let forms = forms.as_ref();
     // parallel over the pairs (i, j): tasks of m − j − 1 triplets each balance the two
     // cores far better than one task per first landmark (m − 1 − i pairs, very unequal)
     let pairs: Vec<(usize, usize)> = (0..m)
         .flat_map(|i| (i + 1..m).map(move |j| (i, j)))
         .collect();
-    let per_first: Vec<Result<StepCounts>> = pairs
-        .into_par_iter()
-        .map(|(i, j)| {
-            let mut out = Vec::new();
-            {
-                for k in j + 1..m {
-                    let counts = triplet_counts(calculus, forms, samples, [i, j, k], orderings)?;
-                    let [a, b, c] = [ids[i], ids[j], ids[k]];
-                    let sets = [
-                        [a, b, c],
-                        [b, a, c],
-                        [a, c, b],
-                        [c, a, b],
-                        [b, c, a],
-                        [c, b, a],
-                    ];
-                    out.extend(
-                        sets.into_iter()
-                            .zip(counts)
-                            .map(|(s, c)| (LandmarkSet(s), c)),
-                    );
-                }
-            }
-            Ok(out)
+    let n_sets: usize = pairs.iter().map(|&(_, j)| (m - j - 1) * n_orders).sum();
+    let mut sets = Vec::with_capacity(n_sets);
+    for &(i, j) in &pairs {
+        for k in j + 1..m {
+            let [a, b, c] = [ids[i], ids[j], ids[k]];
+            let six = [
+                [a, b, c],
+                [b, a, c],
+                [a, c, b],
+                [c, a, b],
+                [b, c, a],
+                [c, b, a],
+            ];
+            sets.extend(six.into_iter().take(n_orders).map(LandmarkSet));
+        }
+    }
+    let mut counts = vec![0u32; n_sets * q];
+    // each pair's slice of the table: (m − j − 1) triplets × n_orders histograms
+    let mut slices = Vec::with_capacity(pairs.len());
+    let mut rest = counts.as_mut_slice();
+    for &(_, j) in &pairs {
+        let (mine, tail) = rest.split_at_mut((m - j - 1) * n_orders * q);
+        slices.push(mine);
+        rest = tail;
+    }
+    // Each landmark's largest squared norm over its samples: with them, one comparison per
+    // pair of a sample settles the coincidence check (see `Apart`).
+    let max_norm2: Vec<f64> = (0..m)
+        .map(|i| {
+            let (x, y) = samples.columns(i);
+            x.iter()
+                .zip(y)
+                .map(|(x, y)| x * x + y * y)
+                .fold(0.0, f64::max)
         })
         .collect();
-    let mut all = Vec::new();
-    for r in per_first {
-        all.extend(r?);
+    pairs
+        .into_par_iter()
+        .zip(slices)
+        .try_for_each(|((i, j), out)| {
+            let mut scratch = Scratch::default();
+            for (k, triplet_out) in (j + 1..m).zip(out.chunks_exact_mut((n_orders * q).max(1))) {
+                let apart = Apart::new([max_norm2[i], max_norm2[j], max_norm2[k]]);
+                triplet_counts(
+                    calculus,
+                    forms,
+                    samples,
+                    ([i, j, k], apart),
+                    orderings,
+                    &mut scratch,
+                    triplet_out,
+                )?;
+            }
+            Ok::<(), PqrmError>(())
+        })?;
+    Ok(StepCounts {
+        n_states: q,
+        sets,
+        counts,
+    })
+}
+
+/// Buffers one task reuses for all its triplets (no allocation per triplet).
+#[derive(Default)]
+struct Scratch {
+    /// Sign-key histogram, four interleaved lanes per key: `HIST_BINS` long once used (a
+    /// fixed length, so that a masked key needs no bounds check).
+    hist: Vec<[u32; 4]>,
+    /// One chunk of samples in the base frame (`x`, `y`, `n`) and their keys: kept here, not
+    /// zeroed on the stack for every triplet.
+    frame: Vec<[[f64; CHUNK]; 3]>,
+    keys: Vec<[u64; CHUNK]>,
+    /// Per-ordering histograms of the generic path, four lanes per state.
+    lanes: Vec<[u32; 4]>,
+}
+
+/// Conservative thresholds for the coincidence checks of [`base_sample`], from each
+/// landmark's largest squared norm over its samples (`r²`): `tol²·(1 + r²_a + r²_b)` is at
+/// least `tol²·(1 + a² + b²)` for every sample (rounding is monotone), so `|AB|² > ab`
+/// implies the exact check passes. A chunk where a sample fails the bound is settled with the
+/// exact checks: the outcome is the exact one, at one comparison per pair.
+#[derive(Debug, Clone, Copy)]
+struct Apart {
+    ab: f64,
+    ac: f64,
+    bc: f64,
+}
+
+impl Apart {
+    fn new([ra, rb, rc]: [f64; 3]) -> Self {
+        let tol2 = qsr_core::DEGENERATE_TOLERANCE * qsr_core::DEGENERATE_TOLERANCE;
+        Self {
+            ab: tol2 * (1.0 + ra + rb),
+            ac: tol2 * (1.0 + ra + rc),
+            bc: tol2 * (1.0 + rb + rc),
+        }
     }
-    Ok(all)
+}
+
+/// One sample of a triplet in its base frame, `(x, y, n, m)` as in [`base_sample`], and
+/// `|AB|²`.
+#[inline(always)]
+fn base_frame(a: [f64; 2], b: [f64; 2], c: [f64; 2]) -> ([f64; 4], f64) {
+    let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
+    let len2 = dx * dx + dy * dy;
+    let (vx, vy) = (c[0] - a[0], c[1] - a[1]);
+    let inv = 1.0 / len2;
+    let x = -(dx * vy - dy * vx) * inv;
+    let y = (dx * vx + dy * vy) * inv;
+    let n = x * x + y * y;
+    let m = x * x + (y - 1.0) * (y - 1.0);
+    ([x, y, n, m], len2)
 }
 
 /// One sample of a triplet in its base normalised frame: `(x, y, n = x² + y²,
@@ -177,17 +388,10 @@ pub fn step_counts(
 /// counting paths so they normalise identically.
 #[inline(always)]
 fn base_sample(a: [f64; 2], b: [f64; 2], c: [f64; 2], tol2: f64) -> ([f64; 4], bool, bool) {
-    let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
-    let len2 = dx * dx + dy * dy;
-    let (vx, vy) = (c[0] - a[0], c[1] - a[1]);
+    let ([x, y, n, m], len2) = base_frame(a, b, c);
     let a2 = a[0] * a[0] + a[1] * a[1];
     let b2 = b[0] * b[0] + b[1] * b[1];
     let c2 = c[0] * c[0] + c[1] * c[1];
-    let inv = 1.0 / len2;
-    let x = -(dx * vy - dy * vx) * inv;
-    let y = (dx * vx + dy * vy) * inv;
-    let n = x * x + y * y;
-    let m = x * x + (y - 1.0) * (y - 1.0);
     let ab = len2 > tol2 * (1.0 + a2 + b2);
     let c_apart = (n * len2 > tol2 * (1.0 + a2 + c2)) & (m * len2 > tol2 * (1.0 + b2 + c2));
     ([x, y, n, m], ab, c_apart)
@@ -213,16 +417,20 @@ fn triplet_counts(
     calculus: &Calculus,
     forms: Option<&SixForms>,
     samples: &ScanSamples,
-    triplet: [usize; 3],
+    triplet: ([usize; 3], Apart),
     orderings: Orderings,
-) -> Result<Vec<Vec<u32>>> {
+    scratch: &mut Scratch,
+    out: &mut [u32],
+) -> Result<()> {
     #[cfg(target_arch = "x86_64")]
     if std::arch::is_x86_feature_detected!("avx2") {
         #[allow(unsafe_code)]
         // SAFETY: `triplet_counts_avx2` only requires AVX2, which was just detected.
-        return unsafe { triplet_counts_avx2(calculus, forms, samples, triplet, orderings) };
+        return unsafe {
+            triplet_counts_avx2(calculus, forms, samples, triplet, orderings, scratch, out)
+        };
     }
-    triplet_counts_portable(calculus, forms, samples, triplet, orderings)
+    triplet_counts_portable(calculus, forms, samples, triplet, orderings, scratch, out)
 }
 
 #[cfg(target_arch = "x86_64")]
@@ -231,32 +439,43 @@ fn triplet_counts_avx2(
     calculus: &Calculus,
     forms: Option<&SixForms>,
     samples: &ScanSamples,
-    triplet: [usize; 3],
+    triplet: ([usize; 3], Apart),
     orderings: Orderings,
-) -> Result<Vec<Vec<u32>>> {
-    triplet_counts_portable(calculus, forms, samples, triplet, orderings)
+    scratch: &mut Scratch,
+    out: &mut [u32],
+) -> Result<()> {
+    triplet_counts_portable(calculus, forms, samples, triplet, orderings, scratch, out)
 }
 
-/// `forms` is [`SixForms::new`] of `calculus` when all six orderings are wanted and the
-/// calculus has them (built once per step by the caller).
+/// `forms` is [`SixForms::new`] of `calculus` for the orderings wanted when the calculus
+/// has such forms (built once per step by the caller). `out` receives the orderings'
+/// histograms one after the other (`n_states` counts each).
 #[inline(always)]
 fn triplet_counts_portable(
     calculus: &Calculus,
     forms: Option<&SixForms>,
     samples: &ScanSamples,
-    [i, j, k]: [usize; 3],
+    ([i, j, k], apart): ([usize; 3], Apart),
     orderings: Orderings,
-) -> Result<Vec<Vec<u32>>> {
-    if orderings == Orderings::All
-        && let Some(forms) = forms
-    {
-        return six_counts(calculus, forms, samples, [i, j, k]);
+    scratch: &mut Scratch,
+    out: &mut [u32],
+) -> Result<()> {
+    if let Some(forms) = forms {
+        // the number of orderings as a constant: the canonical kernel skips the checks and
+        // the table columns of the other five
+        return if forms.orders == 6 {
+            six_counts::<6>(calculus, forms, samples, ([i, j, k], apart), scratch, out)
+        } else {
+            six_counts::<1>(calculus, forms, samples, ([i, j, k], apart), scratch, out)
+        };
     }
     let q = calculus.n_states();
     let n_orders = if orderings == Orderings::All { 6 } else { 1 };
     // Four interleaved sub-histograms per ordering: consecutive samples mostly share a state,
     // and a single counter would serialise on its own increments.
-    let mut counts = vec![vec![[0u32; 4]; q]; n_orders];
+    let lanes = &mut scratch.lanes;
+    lanes.clear();
+    lanes.resize(n_orders * q, [0u32; 4]);
     let ((ax, ay), (bx, by), (cx, cy)) =
         (samples.columns(i), samples.columns(j), samples.columns(k));
     let s = samples.samples();
@@ -292,7 +511,7 @@ fn triplet_counts_portable(
         if !valid {
             return Err(coincident(samples, [i, j, k]));
         }
-        for (o, c) in counts.iter_mut().enumerate() {
+        for (o, c) in lanes.chunks_exact_mut(q.max(1)).enumerate() {
             calculus.classify_normalised_into(&px[o][..len], &py[o][..len], &mut states[..len]);
             let mut quads = states[..len].chunks_exact(4);
             for quad in &mut quads {
@@ -305,10 +524,10 @@ fn triplet_counts_portable(
             }
         }
     }
-    Ok(counts
-        .into_iter()
-        .map(|c| c.into_iter().map(|l| l.iter().sum()).collect())
-        .collect())
+    for (o, l) in out.iter_mut().zip(lanes.iter()) {
+        *o = l.iter().sum();
+    }
+    Ok(())
 }
 
 /// The constraints of a line-and-circle calculus, rewritten for each of the six orderings
@@ -338,12 +557,18 @@ fn triplet_counts_portable(
 /// `a·u + d` with `a = ±2^e` is the exact comparison `u ≷ −d/a`. Samples where a quantity
 /// is exactly zero (on a boundary, where the `zero` side of each constraint decides) take a
 /// slow path per sample. The counts are identical to classifying each ordering directly.
+///
+/// Built for the canonical ordering alone ([`Orderings::Canonical`]), only its own quantities
+/// are kept (the EDC's 5 of 7): the same keys, a sixth of the table.
 struct SixForms {
+    /// How many orderings, in the order of the table above: 6, or 1 (the base ordering).
+    orders: usize,
     /// The distinct quantities.
     quantities: Vec<Quantity>,
     /// Per ordering, per constraint: which quantity decides it and how.
     members: [Vec<Member>; 6],
-    /// The six orderings' states for each key with no quantity zero (bit g: quantity g > 0).
+    /// The orderings' states for each key with no quantity zero (bit g: quantity g > 0);
+    /// `orders` of the six are used.
     states: Vec<[u16; 6]>,
 }
 
@@ -370,6 +595,9 @@ struct Member {
 
 /// Most quantities handled by keys (2^10 histogram bins).
 const MAX_QUANTITIES: usize = 10;
+
+/// Bins of the key histogram: every key of `MAX_QUANTITIES` bits.
+const HIST_BINS: usize = 1 << MAX_QUANTITIES;
 
 fn power_of_two(v: f64) -> bool {
     v.is_normal() && v.abs().to_bits() & ((1u64 << 52) - 1) == 0
@@ -403,7 +631,7 @@ impl Quantity {
 }
 
 impl SixForms {
-    fn new(calculus: &Calculus) -> Option<Self> {
+    fn new(calculus: &Calculus, orders: usize) -> Option<Self> {
         let qsr_core::Partition::Constraints(partition) = calculus.partition() else {
             return None;
         };
@@ -432,7 +660,7 @@ impl SixForms {
                 [de, be, -ga - 2.0 * de, al + ga + de],
                 [al + ga + de, -be, -ga - 2.0 * de, de],
             ];
-            for (o, r) in rows.into_iter().enumerate() {
+            for (o, r) in rows.into_iter().enumerate().take(orders) {
                 let (quantity, negated) = Quantity::of(r);
                 let q = match quantities.iter().position(|x| *x == quantity) {
                     Some(q) => q,
@@ -460,13 +688,14 @@ impl SixForms {
                     *s = if key >> g & 1 == 1 { 1 } else { -1 };
                 }
                 let mut out = [0u16; 6];
-                for (o, st) in out.iter_mut().enumerate() {
+                for (o, st) in out.iter_mut().enumerate().take(orders) {
                     *st = table[Self::bin(&members[o], &signs)];
                 }
                 out
             })
             .collect();
         Some(Self {
+            orders,
             quantities,
             members,
             states,
@@ -482,14 +711,17 @@ impl SixForms {
     }
 }
 
-/// [`triplet_counts`] for all six orderings of a line-and-circle calculus via [`SixForms`].
+/// [`triplet_counts`] for the `ORDERS` orderings of a line-and-circle calculus via
+/// [`SixForms`] (built for as many).
 #[inline(always)]
-fn six_counts(
+fn six_counts<const ORDERS: usize>(
     calculus: &Calculus,
     forms: &SixForms,
     samples: &ScanSamples,
-    [i, j, k]: [usize; 3],
-) -> Result<Vec<Vec<u32>>> {
+    ([i, j, k], apart): ([usize; 3], Apart),
+    scratch: &mut Scratch,
+    out: &mut [u32],
+) -> Result<()> {
     let qsr_core::Partition::Constraints(partition) = calculus.partition() else {
         return Err(PqrmError::InvalidConfig(
             "six_counts needs a constraint calculus".into(),
@@ -500,16 +732,29 @@ fn six_counts(
     let g = forms.quantities.len();
     // four interleaved sub-histograms: consecutive samples mostly share a key, and a single
     // counter would serialise on its own increments
-    let mut hist = vec![[0u32; 4]; 1 << g];
-    let mut out = vec![vec![0u32; q]; 6];
+    scratch.hist.resize(HIST_BINS, [0u32; 4]);
+    let Ok(hist): std::result::Result<&mut [[u32; 4]; HIST_BINS], _> =
+        scratch.hist.as_mut_slice().try_into()
+    else {
+        return Err(PqrmError::InvalidConfig(
+            "six_counts: histogram size".into(),
+        ));
+    };
+    hist[..1 << g].fill([0u32; 4]);
+    out.fill(0);
     let ((ax, ay), (bx, by), (cx, cy)) =
         (samples.columns(i), samples.columns(j), samples.columns(k));
     let s = samples.samples();
-    let mut xs = [0.0f64; CHUNK];
-    let mut ys = [0.0f64; CHUNK];
-    let mut ns = [0.0f64; CHUNK];
+    if scratch.frame.is_empty() {
+        scratch.frame.push([[0.0; CHUNK]; 3]);
+        scratch.keys.push([0; CHUNK]);
+    }
+    let ([[xs, ys, ns], ..], [keys, ..]) =
+        (scratch.frame.as_mut_slice(), scratch.keys.as_mut_slice())
+    else {
+        return Err(PqrmError::InvalidConfig("six_counts: scratch".into()));
+    };
     // key lanes: bit g = quantity g > 0, bit 32 + g = quantity g == 0
-    let mut keys = [0u64; CHUNK];
     let tol2 = qsr_core::DEGENERATE_TOLERANCE * qsr_core::DEGENERATE_TOLERANCE;
     let mut signs = vec![0i8; g];
     for start in (0..s).step_by(CHUNK) {
@@ -517,25 +762,36 @@ fn six_counts(
         let mut valid = true;
         for t in 0..len {
             let u = start + t;
-            let ([x, y, n, _], ab, c_apart) =
-                base_sample([ax[u], ay[u]], [bx[u], by[u]], [cx[u], cy[u]], tol2);
-            valid &= ab & c_apart;
+            let ([x, y, n, mm], len2) = base_frame([ax[u], ay[u]], [bx[u], by[u]], [cx[u], cy[u]]);
+            // the canonical ordering alone needs only A ≠ B; the others use C as a reference
+            valid &= (len2 > apart.ab)
+                & (ORDERS == 1 || ((n * len2 > apart.ac) & (mm * len2 > apart.bc)));
             xs[t] = x;
             ys[t] = y;
             ns[t] = n;
         }
         if !valid {
-            return Err(coincident(samples, [i, j, k]));
+            // the bounds are conservative: the exact checks decide
+            for u in start..start + len {
+                let (_, ab, c_apart) =
+                    base_sample([ax[u], ay[u]], [bx[u], by[u]], [cx[u], cy[u]], tol2);
+                if !(ab & (ORDERS == 1 || c_apart)) {
+                    return Err(coincident(samples, [i, j, k]));
+                }
+            }
         }
         let (x, y, n) = (&xs[..len], &ys[..len], &ns[..len]);
         let key = &mut keys[..len];
         key.fill(0);
         let vars = [n, x, y];
         for (b, quantity) in forms.quantities.iter().enumerate() {
+            // masks selected by the comparisons (compare, and, or), not bits shifted into
+            // place per lane
+            let (gt, zero) = (1u64 << b, 1u64 << (32 + b));
             match *quantity {
                 Quantity::Single { var, t } => {
                     key.iter_mut().zip(vars[var]).for_each(|(kv, &u)| {
-                        *kv |= (u64::from(u > t) << b) | (u64::from(u == t) << (32 + b));
+                        *kv |= (if u > t { gt } else { 0 }) | (if u == t { zero } else { 0 });
                     });
                 }
                 Quantity::General {
@@ -547,13 +803,14 @@ fn six_counts(
                         .zip(n)
                         .for_each(|(((kv, &x), &y), &n)| {
                             let v = fa * n + fb * x + fc * y + fd;
-                            *kv |= (u64::from(v > 0.0) << b) | (u64::from(v == 0.0) << (32 + b));
+                            *kv |=
+                                (if v > 0.0 { gt } else { 0 }) | (if v == 0.0 { zero } else { 0 });
                         });
                 }
             }
         }
         let mut quads = key.chunks_exact(4);
-        let mut slow = |kv: u64, out: &mut Vec<Vec<u32>>| {
+        let mut slow = |kv: u64, out: &mut [u32]| {
             // a quantity exactly zero: the constraints' zero sides decide
             for (b, sg) in signs.iter_mut().enumerate() {
                 *sg = if kv >> (32 + b) & 1 == 1 {
@@ -564,36 +821,36 @@ fn six_counts(
                     -1
                 };
             }
-            for (o, c) in out.iter_mut().enumerate() {
+            for (o, c) in out.chunks_exact_mut(q).enumerate().take(ORDERS) {
                 c[usize::from(table[SixForms::bin(&forms.members[o], &signs)])] += 1;
             }
         };
         for quad in &mut quads {
             for (lane, &kv) in quad.iter().enumerate() {
                 if kv >> 32 == 0 {
-                    hist[kv as usize][lane] += 1;
+                    hist[kv as usize & (HIST_BINS - 1)][lane] += 1;
                 } else {
-                    slow(kv, &mut out);
+                    slow(kv, out);
                 }
             }
         }
         for &kv in quads.remainder() {
             if kv >> 32 == 0 {
-                hist[kv as usize][0] += 1;
+                hist[kv as usize & (HIST_BINS - 1)][0] += 1;
             } else {
-                slow(kv, &mut out);
+                slow(kv, out);
             }
         }
     }
-    for (kv, lanes) in hist.iter().enumerate() {
+    for (kv, lanes) in hist[..1 << g].iter().enumerate() {
         let n: u32 = lanes.iter().sum();
         if n > 0 {
-            for (o, c) in out.iter_mut().enumerate() {
+            for (o, c) in out.chunks_exact_mut(q).enumerate().take(ORDERS) {
                 c[usize::from(forms.states[kv][o])] += n;
             }
         }
     }
-    Ok(out)
+    Ok(())
 }
 
 /// Sums counts of a finer calculus into a coarser one.

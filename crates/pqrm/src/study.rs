@@ -19,7 +19,7 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use crate::error::{PqrmError, Result};
-use crate::likelihood::{LandmarkSet, Orderings, log_likelihood, merge_counts, step_counts};
+use crate::likelihood::{LandmarkSet, Orderings, StepCounts, log_likelihood, step_counts};
 use crate::loaders::Dataset;
 use crate::map::{Pqrm, PqrmConfig, TripletBelief, normalise};
 use crate::metrics::{Baselines, GroundTruth, MapMetrics, evaluate, random_baselines};
@@ -55,14 +55,10 @@ impl CalculusFamily {
         Ok(Self { calculi, merges })
     }
 
-    fn counts_for(
-        &self,
-        i: usize,
-        fine: &[(LandmarkSet, Vec<u32>)],
-    ) -> Vec<(LandmarkSet, Vec<u32>)> {
+    fn counts_for(&self, i: usize, fine: &StepCounts) -> StepCounts {
         match &self.merges[i] {
-            None => fine.to_vec(),
-            Some(m) => fine.iter().map(|(s, c)| (*s, merge_counts(m, c))).collect(),
+            None => fine.clone(),
+            Some(m) => fine.merged(m),
         }
     }
 }
@@ -348,7 +344,7 @@ fn run_trial(
     for (step, scan) in scans.iter().enumerate() {
         if scan.observations.len() < 3 {
             for m in &mut maps {
-                m.apply_counts(&[])?;
+                m.apply_counts(&StepCounts::new(m.calculus().n_states()))?;
             }
             continue;
         }
@@ -687,7 +683,7 @@ pub fn run_real_tempered(
             let calc = &family.calculi[i];
             let acc = &mut frame_acc[i];
             for (set, c) in &counts {
-                let Some(t) = truth.state(calc, set)? else {
+                let Some(t) = truth.state(calc, &set)? else {
                     continue;
                 };
                 let b = TripletBelief {
@@ -696,7 +692,7 @@ pub fn run_real_tempered(
                 };
                 let ml = b.ml_state();
                 let v = votes[i]
-                    .entry(*set)
+                    .entry(set)
                     .or_insert_with(|| (vec![0; calc.n_states()], vec![0.0; calc.n_states()]));
                 v.0[ml.index()] += 1;
                 for (m, p) in v.1.iter_mut().zip(b.probabilities()) {

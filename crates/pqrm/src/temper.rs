@@ -287,14 +287,14 @@ pub fn fit_temper(
         let b = block_of(i, n, k);
         for (ci, counts) in frame_counts(i, scan)?.into_iter().enumerate() {
             let q = calculi[ci].n_states();
-            for (set, c) in counts {
+            for (set, c) in &counts {
                 let e = blocks[ci].entry(set).or_insert_with(|| BlockSums {
                     sums: vec![0.0; k * q],
                     frames: vec![0; k],
                 });
                 for (s, l) in e.sums[b * q..(b + 1) * q]
                     .iter_mut()
-                    .zip(log_likelihood(&c, config.floor))
+                    .zip(log_likelihood(c, config.floor))
                 {
                     *s += l;
                 }
@@ -338,7 +338,7 @@ pub fn fit_temper(
         }
         for (ci, counts) in frame_counts(i, scan)?.into_iter().enumerate() {
             let q = calculi[ci].n_states();
-            for (set, c) in counts {
+            for (set, c) in &counts {
                 let Some(e) = blocks[ci].get(&set) else {
                     continue;
                 };
@@ -367,7 +367,7 @@ pub fn fit_temper(
                         .collect();
                     (beliefs, vec![0.0; g], 0)
                 });
-                let seen: Vec<f64> = log_likelihood(&c, score_floor)
+                let seen: Vec<f64> = log_likelihood(c, score_floor)
                     .into_iter()
                     .map(f64::exp)
                     .collect();

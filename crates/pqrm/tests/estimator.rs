@@ -2,7 +2,9 @@
 //! and the Bayes filter's algebra.
 #![allow(clippy::unwrap_used)] // tests: a panic is the failure report
 
-use pqrm::likelihood::{LandmarkSet, Orderings, log_likelihood, merge_counts, step_counts};
+use pqrm::likelihood::{
+    LandmarkSet, Orderings, StepCounts, log_likelihood, merge_counts, step_counts,
+};
 use pqrm::study::single_observation;
 use pqrm::{LandmarkId, Observation, Pqrm, PqrmConfig, PqrmError, Scan, ScanSamples};
 use qsr_core::{Calculus, Point2};
@@ -151,7 +153,7 @@ fn scan(points: &[(u32, [f64; 2])], sigma: f64) -> Scan {
 #[test]
 fn the_filter_is_commutative_in_the_order_of_observations() {
     let edc = Calculus::builtin("edc").unwrap();
-    let steps: Vec<Vec<(LandmarkSet, Vec<u32>)>> = (0..6)
+    let steps: Vec<StepCounts> = (0..6)
         .map(|k| {
             let sc = scan(
                 &[
@@ -179,8 +181,12 @@ fn the_filter_is_commutative_in_the_order_of_observations() {
     let (a, b) = (build(&[0, 1, 2, 3, 4, 5]), build(&[5, 3, 1, 0, 4, 2]));
     for (set, belief) in a.iter() {
         let other = b.record(set).unwrap();
+        // the map keeps log-probabilities in f32 between steps: equal up to that rounding
         for (x, y) in belief.log_p.iter().zip(&other.log_p) {
-            assert!((x - y).abs() < 1e-9, "{set:?}");
+            assert!(
+                (x - y).abs() < 1e-5 * x.abs().max(1.0),
+                "{set:?}: {x} vs {y}"
+            );
         }
     }
 }
@@ -198,8 +204,8 @@ fn ten_million_updates_stay_finite_and_normalised() {
     .unwrap();
     let set = LandmarkSet::new(1, 2, 3);
     // Evidence mildly against the true state half the time: no underflow, no NaN.
-    let e1 = vec![(set, vec![600, 200, 150, 50])];
-    let e2 = vec![(set, vec![100, 500, 300, 100])];
+    let e1 = StepCounts::from_vecs(&[(set, vec![600, 200, 150, 50])]).unwrap();
+    let e2 = StepCounts::from_vecs(&[(set, vec![100, 500, 300, 100])]).unwrap();
     for k in 0..10_000_000u32 {
         m.apply_counts(if k % 2 == 0 { &e1 } else { &e2 }).unwrap();
     }
@@ -209,12 +215,16 @@ fn ten_million_updates_stay_finite_and_normalised() {
     assert!((total - 1.0).abs() < 1e-9, "{total}");
     assert_eq!(b.updates, 10_000_000);
     // Per pair of updates state q gains ln((c1_q + ½)(c2_q + ½)): state 1 (200.5·500.5) beats
-    // state 0 (600.5·100.5); after 5·10^6 pairs the log-odds are exactly 5·10^6 times that.
+    // state 0 (600.5·100.5); after 5·10^6 pairs the log-odds are, in exact arithmetic, 5·10^6 times that.
     assert_eq!(b.ml_state().0, 1);
     let want = 5e6 * ((600.5f64 * 100.5) / (200.5 * 500.5)).ln();
     let got = b.log_p[0] - b.log_p[1];
+    // The map keeps log-probabilities in f32 between steps: at 2.5e6 nats a step's rounding
+    // is up to 0.125, so the ruled-out state's log-odds drift by about 1 % over 10^7 steps
+    // (its probability is 0 in either precision). A filter adding the wrong evidence, or
+    // dropping the normalisation, is off by far more.
     assert!(
-        ((got - want) / want).abs() < 1e-9,
+        ((got - want) / want).abs() < 0.05,
         "log-odds {got} vs {want}"
     );
 }
@@ -238,7 +248,7 @@ fn merged_counts_equal_sampling_the_coarser_calculus_statistically() {
         let merge = edc.merge_map(&coarse).unwrap();
         let direct =
             step_counts(&coarse, &ScanSamples::draw(&sc, s, 2, 0), Orderings::All).unwrap();
-        for ((set, f), (set2, d)) in fine.iter().zip(&direct) {
+        for ((set, f), (set2, d)) in fine.iter().zip(direct.iter()) {
             assert_eq!(set, set2);
             let m = merge_counts(&merge, f);
             // Two independent binomial estimates of the same p: |p1 − p2| < 5·√(2p(1−p)/s).
@@ -272,8 +282,11 @@ fn the_floor_keeps_every_state_possible() {
     )
     .unwrap();
     let set = LandmarkSet::new(1, 2, 3);
-    m.apply_counts(&[(set, vec![5, 0, 0, 0])]).unwrap();
-    let r = m.apply_counts(&[(set, vec![0, 5, 0, 0])]).unwrap();
+    m.apply_counts(&StepCounts::from_vecs(&[(set, vec![5, 0, 0, 0])]).unwrap())
+        .unwrap();
+    let r = m
+        .apply_counts(&StepCounts::from_vecs(&[(set, vec![0, 5, 0, 0])]).unwrap())
+        .unwrap();
     assert_eq!(r.conflicts, 1);
     assert_eq!(m.record(&set).unwrap().ml_state().0, 1);
 }
@@ -472,7 +485,7 @@ fn the_closed_form_orderings_equal_direct_classification_in_every_calculus() {
             continue;
         }
         tried += 1;
-        for (set, counts) in step_counts(&cal, &samples, Orderings::All).unwrap() {
+        for (set, counts) in &step_counts(&cal, &samples, Orderings::All).unwrap() {
             let [a, b, c] = set.0;
             let direct =
                 set_counts(&cal, &samples, [index(a), index(b), index(c)], &mut buf).unwrap();
@@ -515,7 +528,8 @@ fn boundary_configurations_take_each_constraints_zero_side() {
         let spec = cal.spec();
         let counts = step_counts(&cal, &samples, Orderings::All).unwrap();
         let mut on_boundary = 0;
-        for group in counts.chunks(6) {
+        let pairs: Vec<_> = counts.iter().collect();
+        for group in pairs.chunks(6) {
             let [a, b, c] = group[0].0.0;
             let (pa, pb, pc) = (pos(a), pos(b), pos(c));
             // the base frame exactly as the sampler computes it
@@ -563,6 +577,13 @@ fn boundary_configurations_take_each_constraints_zero_side() {
             on_boundary > 20,
             "{name}: {on_boundary} boundary cases exercised"
         );
+        // The canonical kernel (its own quantities only) takes the same zero sides.
+        let canonical = step_counts(&cal, &samples, Orderings::Canonical).unwrap();
+        assert_eq!(canonical.len() * 6, counts.len());
+        for (one, group) in canonical.iter().zip(pairs.chunks(6)) {
+            assert_eq!(one.0, group[0].0, "{name}: the canonical set comes first");
+            assert_eq!(one.1, group[0].1, "{name} {:?}", one.0);
+        }
     }
 }
 

@@ -2,7 +2,7 @@
 //! MRCLAM end to end, and the embedding example.
 #![allow(clippy::unwrap_used)] // tests: a panic is the failure report
 
-use pqrm::likelihood::{LandmarkSet, Orderings};
+use pqrm::likelihood::{LandmarkSet, Orderings, StepCounts};
 use pqrm::study::{MonteCarloConfig, noise_check, run_monte_carlo, run_real};
 use pqrm::{LandmarkId, Observation, Pqrm, PqrmConfig, Scan};
 use qsr_core::Calculus;
@@ -79,11 +79,12 @@ fn merging_two_maps_equals_one_map_of_all_the_evidence() {
     let set = LandmarkSet::new(1, 2, 3);
     let other = LandmarkSet::new(2, 1, 3);
     let ev = [
-        vec![(set, vec![50, 20, 10, 5, 3, 2])],
-        vec![
+        StepCounts::from_vecs(&[(set, vec![50, 20, 10, 5, 3, 2])]).unwrap(),
+        StepCounts::from_vecs(&[
             (set, vec![30, 40, 10, 5, 3, 2]),
             (other, vec![1, 2, 3, 4, 5, 75]),
-        ],
+        ])
+        .unwrap(),
     ];
     let mut a = Pqrm::new(calc.clone(), cfg).unwrap();
     a.apply_counts(&ev[0]).unwrap();
@@ -95,8 +96,9 @@ fn merging_two_maps_equals_one_map_of_all_the_evidence() {
     a.merge(&b).unwrap();
     for s in [set, other] {
         let (x, y) = (a.record(&s).unwrap(), all.record(&s).unwrap());
+        // equal up to the f32 rounding of the stored log-probabilities
         for (u, v) in x.log_p.iter().zip(&y.log_p) {
-            assert!((u - v).abs() < 1e-12);
+            assert!((u - v).abs() < 1e-6 * u.abs().max(1.0), "{u} vs {v}");
         }
     }
     let edc = Pqrm::new(Calculus::builtin("edc").unwrap(), cfg).unwrap();
@@ -117,12 +119,13 @@ fn canonical_maps_derive_the_other_orderings() {
     let asked = LandmarkSet::new(2, 1, 3);
     let derived = canon.belief(asked).unwrap();
     let recorded = all.belief(asked).unwrap();
+    // (to the f32 rounding of stored log-probabilities: probabilities within 1e-6)
     for (d, r) in derived.iter().zip(&recorded) {
-        assert!((d - r).abs() < 1e-9, "{derived:?} vs {recorded:?}");
+        assert!((d - r).abs() < 1e-6, "{derived:?} vs {recorded:?}");
     }
     // Other permutations spread probability over their sets: still a distribution.
     let d = canon.belief(LandmarkSet::new(3, 1, 2)).unwrap();
-    assert!((d.iter().sum::<f64>() - 1.0).abs() < 1e-9);
+    assert!((d.iter().sum::<f64>() - 1.0).abs() < 1e-6);
     assert!(canon.belief(LandmarkSet::new(1, 2, 9)).is_none());
 }
 

@@ -1,6 +1,7 @@
 //! Heavy-tailed inverse sensor models and tempering in the mapper.
 #![allow(clippy::unwrap_used)] // tests: a panic is the failure report
 
+use pqrm::likelihood::StepCounts;
 use pqrm::sensor::SensorModel;
 use pqrm::{LandmarkId, LandmarkSet, Observation, Pqrm, PqrmConfig, Scan};
 use qsr_core::Calculus;
@@ -18,7 +19,7 @@ fn belief(map: &Pqrm) -> Vec<f64> {
 #[test]
 fn tempering_by_a_half_makes_two_equal_frames_count_as_one() {
     let lr = Calculus::builtin("left-right").unwrap();
-    let counts = vec![(LandmarkSet::new(0, 1, 2), vec![700, 300])];
+    let counts = StepCounts::from_vecs(&[(LandmarkSet::new(0, 1, 2), vec![700, 300])]).unwrap();
     let mut half = Pqrm::new(
         lr.clone(),
         PqrmConfig {
