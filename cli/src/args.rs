@@ -39,6 +39,9 @@ pub enum Command {
     /// The whole pipeline: map the field site with a lidar, learn a calculus with SERGE,
     /// navigate with Q-Link; writes out/demo/run.mcap (Foxglove), summary.json, demo.svg.
     Demo(crate::demo_cmd::DemoArgs),
+    /// Every thesis study through one runner: list, print a config, run.
+    #[command(subcommand)]
+    Study(crate::study_cmd::StudyCmd),
     /// Qualitative reasoning over constraint networks: algebraic closure, scenarios.
     #[command(subcommand)]
     Reason(crate::reason_cmd::ReasonCmd),

@@ -9,13 +9,13 @@ use std::time::Instant;
 use anyhow::{Result, bail};
 use pqrm::{LandmarkId, Observation, Pqrm, PqrmConfig, Scan};
 use qlink::{
-    Controller, ControllerKind, Layer, LinkGraph, NavConfig, Navigator, QualitativeMap,
-    SearchPomdp, WorldPerception,
+    Controller, ControllerKind, Layer, LinkGraph, NavConfig, Navigator, QualitativeMap, SearchPomdp,
 };
 use qsr_core::Calculus;
 use serde_json::{Value, json};
 use serge::learn::{TripletObservation, triplet_beliefs};
 use serge::{CellMasses, Grid, Serge, SergeParams};
+use studies::world_perception::WorldPerception;
 
 use crate::output::{Staging, write_atomic};
 use qrm_log::{McapLog, stamp, yaw};

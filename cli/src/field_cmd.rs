@@ -1,19 +1,40 @@
-//! `qrm qlink field`: the §4.4.2 field-site experiment in simulation (see `qlink::field`).
+//! `qrm qlink field`: the §4.4.2 field-site experiment in simulation (see
+//! `studies::qlink::field`).
 
 use std::fmt::Write as _;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use anyhow::{Context, Result};
-use qlink::field::{
+use serde_json::json;
+use studies::qlink::field::{
     BoundRange, BoundSummary, FieldMap, FieldParams, FieldResult, FieldSummary, FieldTask,
     FieldTrial, FieldVariant, MapSize, MappingStats, RestrictedPlans, TaskDraws, bound_summary,
     map_size, restricted_plans, run_field, summarise,
 };
-use serde_json::json;
 
 use crate::output::{CsvTable, Staging, write_atomic};
-use crate::qlink_cmd::FieldArgs;
+
+/// `qrm qlink field`.
+#[derive(Debug, clap::Args)]
+pub struct FieldArgs {
+    /// Trials per variant (default 200; quick: 12).
+    #[arg(long)]
+    pub trials: Option<usize>,
+    /// Worlds (scenario seeds seed, seed + 1, …), each mapped and navigated on its own
+    /// (default 5; quick: 1). Rates are reported per world and pooled.
+    #[arg(long)]
+    pub worlds: Option<usize>,
+    /// Fewer trials, fewer samples and coarser checks: for tests.
+    #[arg(long)]
+    pub quick: bool,
+    /// Seed.
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    /// Output directory.
+    #[arg(long)]
+    pub out: PathBuf,
+}
 
 /// Thesis Table 4.2: (|P|, paths, mean trajectory length m).
 const THESIS_TABLE_4_2: [(usize, usize, f64); 6] = [

@@ -34,6 +34,7 @@ mod reason_cmd;
 mod reason_report;
 mod serge_cmd;
 mod sim_cmd;
+mod study_cmd;
 
 use std::process::ExitCode;
 
@@ -52,6 +53,7 @@ fn main() -> ExitCode {
         args::Command::Qlink(cmd) => qlink_cmd::run(cmd),
         args::Command::Demo(a) => demo_cmd::run(a),
         args::Command::Reason(cmd) => reason_cmd::run(cmd),
+        args::Command::Study(cmd) => study_cmd::run(cmd),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -7,9 +7,11 @@ use std::time::Instant;
 use anyhow::{Context, Result, bail};
 use qsr_core::Calculus;
 use serde_json::json;
-use serge::datasets::{DATASETS, Dataset};
-use serge::study::{CvRecord, CvSummary, StudyConfig, cross_validate, summarise};
 use serge::{BeliefSet, CellMasses, Grid, ResolutionTree, SalientRegionMap, Serge, SergeParams};
+use studies::serge::cross_validation::{
+    CvRecord, CvSummary, StudyConfig, cross_validate, summarise,
+};
+use studies::serge::datasets::{DATASETS, Dataset};
 
 use crate::output::{CsvTable, Staging, write_atomic};
 use crate::plot::{RegionPicture, Series, line_chart, region_map};

@@ -34,9 +34,6 @@ pub enum QlinkError {
     /// An error from the mapper.
     #[error(transparent)]
     Pqrm(#[from] pqrm::PqrmError),
-    /// An error from the simulator.
-    #[error(transparent)]
-    Sim(#[from] sim2d::SimError),
 }
 
 /// Shorthand for `Result<T, QlinkError>`.

@@ -26,7 +26,7 @@ use std::collections::HashMap;
 use serde::{Deserialize, Serialize};
 
 use crate::error::{QlinkError, Result};
-use crate::perception::{Perception, d};
+use crate::perception::{Perception, distance as d};
 
 /// Systematic odometry error.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -122,7 +122,11 @@ pub enum Sensing {
 }
 
 impl Sensing {
-    pub(crate) fn check(&self) -> Result<()> {
+    /// Checks the schedule.
+    ///
+    /// # Errors
+    /// [`QlinkError::InvalidParameter`] for stops at a non-positive or non-finite angle.
+    pub fn check(&self) -> Result<()> {
         match *self {
             Self::AtStops { degrees } if !(degrees.is_finite() && degrees > 0.0) => {
                 Err(QlinkError::InvalidParameter(format!(
@@ -135,7 +139,11 @@ impl Sensing {
 }
 
 impl References {
-    pub(crate) fn check(&self) -> Result<()> {
+    /// Checks the odometry's errors.
+    ///
+    /// # Errors
+    /// [`QlinkError::InvalidParameter`] for a negative or non-finite error.
+    pub fn check(&self) -> Result<()> {
         match self {
             Self::Perceived(o) => o.check(),
             Self::Oracle => Ok(()),

@@ -12,10 +12,12 @@
 //! 3. **Trajectory level** ([`Controller`]): turn "go to state q" into a path — an arc, a
 //!    midpoint-and-sweep, the closest point (a QP), or a safe search.
 //!
-//! [`Navigator`] runs the three with a [`Perception`] (range-only or sim2d's occlusion) and
-//! re-plans around failed transitions; [`execution`] holds how it senses and remembers (the
-//! thesis's robot by default, idealised options named as such); [`study`] reproduces §4.4.1 and [`field`] the
-//! lidar-only field-site experiment of §4.4.2.
+//! [`Navigator`] runs the three with a [`Perception`] (anything that says which landmarks
+//! the robot detects: [`RangePerception`] here, a simulator's or a real sensor's elsewhere)
+//! and re-plans around failed transitions; [`execution`] holds how it senses and remembers
+//! (the thesis's robot by default, idealised options named as such). The thesis's studies
+//! (§4.4.1 Table 4.1, the §4.4.2 field experiment) live in the `studies` crate, so a robot
+//! that embeds Q-Link does not compile a simulator.
 //!
 //! ## Why it is built this way
 //! - The map is an interface over layers (PQRM or exact), so hybrid maps of several calculi
@@ -33,19 +35,17 @@
 //!
 //! ## Errors
 //! [`QlinkError`]: `EmptyMap`, `UnknownLandmark`, `SameStartGoal`, `NoPath`,
-//! `InvalidParameter`, `Unsupported`, and wrapped calculus, mapper and simulator errors.
+//! `InvalidParameter`, `Unsupported`, `Cancelled`, and wrapped calculus and mapper errors.
 
 pub mod bounds;
 pub mod controller;
 mod error;
 pub mod execution;
-pub mod field;
 pub mod graph;
 pub mod map;
 pub mod navigate;
 pub mod perception;
 pub mod pomdp;
-pub mod study;
 
 pub use bounds::{Assumptions, BoundCheck, Geometry};
 pub use controller::{Controller, ControllerKind, circle, closest_point, robot_state};
@@ -54,5 +54,5 @@ pub use execution::{Arrival, Odometry, References, Sensing};
 pub use graph::{CostModel, DistanceField, LinkEdge, LinkGraph, Plan};
 pub use map::{Layer, MapElement, QualitativeMap};
 pub use navigate::{Failure, NavConfig, NavOutcome, Navigator, TransitionRecord};
-pub use perception::{Perception, RangePerception, WorldPerception};
+pub use perception::{Perception, RangePerception};
 pub use pomdp::{Decision, SearchPomdp};

@@ -22,8 +22,8 @@
 //! bound of Proposition 2, `(2π + 1)·R·|P|`.
 //!
 //! The simulation moves the robot exactly along the controller's waypoints and senses where
-//! [`Sensing`] says through a [`Perception`]: range only ([`RangePerception`]) or sim2d's full
-//! occlusion ([`WorldPerception`]).
+//! [`Sensing`] says through a [`Perception`]: range only ([`RangePerception`]) or, in the
+//! studies, a simulator's full occlusion.
 
 use std::collections::BTreeSet;
 
@@ -35,8 +35,8 @@ pub use crate::execution::{Arrival, Odometry, References, Sensing};
 use crate::execution::{Leg, Walker};
 use crate::graph::{DistanceField, LinkGraph, Plan};
 use crate::map::QualitativeMap;
-use crate::perception::d;
-pub use crate::perception::{Perception, RangePerception, WorldPerception};
+use crate::perception::distance as d;
+pub use crate::perception::{Perception, RangePerception};
 use crate::pomdp::SearchPomdp;
 
 /// Search circles run at the controller's radius R, a hair inside so that a landmark circled

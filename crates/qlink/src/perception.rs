@@ -1,5 +1,6 @@
-//! What the robot detects: the [`Perception`] trait and the two simulated sensors behind it,
-//! range only ([`RangePerception`]) and sim2d's full occlusion ([`WorldPerception`]).
+//! What the robot detects: the [`Perception`] trait and the simplest sensor behind it, range
+//! only ([`RangePerception`]). A simulator's perception with occlusion (the studies'
+//! `WorldPerception`) or a real robot's detector implements the same trait.
 //!
 //! A perception answers "is landmark `id` detected from here?". It also knows where the
 //! landmark is ([`Perception::position`]), because a simulated detection *measures* that
@@ -45,7 +46,9 @@ impl RangePerception {
     }
 }
 
-pub(crate) fn d(a: [f64; 2], b: [f64; 2]) -> f64 {
+/// Euclidean distance between two points.
+#[must_use]
+pub fn distance(a: [f64; 2], b: [f64; 2]) -> f64 {
     (a[0] - b[0]).hypot(a[1] - b[1])
 }
 
@@ -56,71 +59,15 @@ impl Perception for RangePerception {
     fn sees(&self, pos: [f64; 2], id: u32) -> bool {
         self.index
             .get(&id)
-            .is_some_and(|&i| d(pos, self.pos[i]) <= self.range)
+            .is_some_and(|&i| distance(pos, self.pos[i]) <= self.range)
     }
     fn visible(&self, pos: [f64; 2]) -> Vec<u32> {
         self.ids
             .iter()
             .zip(&self.pos)
-            .filter(|(_, p)| d(pos, **p) <= self.range)
+            .filter(|(_, p)| distance(pos, **p) <= self.range)
             .map(|(id, _)| *id)
             .collect()
-    }
-    fn range(&self) -> f64 {
-        self.range
-    }
-}
-
-/// Landmarks of a sim2d world, detected within range only when fully visible (§4.4.1).
-#[derive(Debug)]
-pub struct WorldPerception<'w> {
-    world: &'w sim2d::World,
-    index: HashMap<u32, usize>,
-    range: f64,
-}
-
-impl<'w> WorldPerception<'w> {
-    /// Perception in `world` with `range`.
-    #[must_use]
-    pub fn new(world: &'w sim2d::World, range: f64) -> Self {
-        Self {
-            index: world
-                .spec()
-                .landmarks
-                .iter()
-                .enumerate()
-                .map(|(i, l)| (l.id, i))
-                .collect(),
-            world,
-            range,
-        }
-    }
-}
-
-impl Perception for WorldPerception<'_> {
-    fn position(&self, id: u32) -> Option<[f64; 2]> {
-        self.index
-            .get(&id)
-            .map(|&i| self.world.spec().landmarks[i].pos)
-    }
-    fn sees(&self, pos: [f64; 2], id: u32) -> bool {
-        self.index.get(&id).is_some_and(|&i| {
-            d(pos, self.world.spec().landmarks[i].pos) <= self.range
-                && self.world.is_fully_visible(pos, i)
-        })
-    }
-    fn visible(&self, pos: [f64; 2]) -> Vec<u32> {
-        let mut out: Vec<u32> = self
-            .world
-            .spec()
-            .landmarks
-            .iter()
-            .enumerate()
-            .filter(|(i, l)| d(pos, l.pos) <= self.range && self.world.is_fully_visible(pos, *i))
-            .map(|(_, l)| l.id)
-            .collect();
-        out.sort_unstable();
-        out
     }
     fn range(&self) -> f64 {
         self.range

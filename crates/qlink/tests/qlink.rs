@@ -7,7 +7,7 @@ use std::collections::{BTreeMap, BTreeSet};
 
 use qlink::{
     Controller, ControllerKind, Layer, LinkGraph, NavConfig, Navigator, QlinkError, QualitativeMap,
-    RangePerception, SearchPomdp, WorldPerception, robot_state,
+    RangePerception, SearchPomdp, robot_state,
 };
 use qsr_core::Calculus;
 
@@ -381,30 +381,6 @@ fn replanning_recovers_from_a_forced_failure() {
         }
     }
     assert!(tried >= 2, "{tried}");
-}
-
-#[test]
-fn occlusion_hides_landmarks_that_range_alone_would_show() {
-    let sc = sim2d::scenario("qlink-200", 0, None)
-        .unwrap()
-        .with_landmark_radius(0.7)
-        .unwrap();
-    let occl = WorldPerception::new(&sc.world, 20.0);
-    let landmarks: Vec<(u32, [f64; 2])> = sc
-        .world
-        .spec()
-        .landmarks
-        .iter()
-        .map(|l| (l.id, l.pos))
-        .collect();
-    let range = RangePerception::new(&landmarks, 20.0);
-    let (mut seen_occl, mut seen_range) = (0, 0);
-    for i in 0..20 {
-        let p = [10.0 * f64::from(i) + 3.0, 100.0];
-        seen_occl += qlink::Perception::visible(&occl, p).len();
-        seen_range += qlink::Perception::visible(&range, p).len();
-    }
-    assert!(seen_occl < seen_range, "{seen_occl} vs {seen_range}");
 }
 
 #[allow(dead_code)]

@@ -178,30 +178,6 @@ fn perfect_odometry_remembers_exactly_and_drift_changes_the_drive() {
 }
 
 #[test]
-fn the_study_drives_arcs_of_the_mapping_range_not_the_sensor_range() {
-    // issue 18 §2: the study gave the controller the sensor range R' under test
-    use qlink::study::{ArcRadius, MAP_RANGE, Setting, StudyConfig};
-    let config = StudyConfig::quick(0);
-    for value in [1.0, 0.8, 0.6] {
-        let setting = Setting {
-            trial: "sensor-range".into(),
-            value,
-            schedule: config.schedule,
-            pairs: None,
-        };
-        let nav = config.nav_config(&setting).unwrap();
-        assert_eq!(nav.controller.radius, MAP_RANGE, "R' = {value} R");
-        let idealised = StudyConfig {
-            radius: ArcRadius::SensorRange,
-            ..config.clone()
-        };
-        let nav = idealised.nav_config(&setting).unwrap();
-        assert!((nav.controller.radius - value * MAP_RANGE).abs() < 1e-12);
-        assert!(!idealised.idealised().is_empty() && config.idealised().is_empty());
-    }
-}
-
-#[test]
 fn a_circle_about_one_landmark_keeps_it_in_view() {
     // the robot sees only landmark 0 and circles it to localise: at R when its sensor
     // reaches R, at R' when it is shorter (a circle that loses its centre searches nothing)
@@ -281,37 +257,6 @@ fn a_transition_needs_the_next_frames_references_not_any_two_landmarks() {
     assert_eq!(
         bad, 0,
         "{bad} of {checked} transitions ended without M_j's references"
-    );
-}
-
-#[test]
-fn the_occlusion_study_can_fail() {
-    // issue 18 §3: 0 failures in 159,200 occlusion runs — sensing every metre with a full
-    // fallback circle always found a clear sight line. Sensing only at arc ends and circle
-    // stops, without the fallback, it fails; the schedule is a study parameter.
-    use qlink::study::{Schedule, StudyConfig, run_study, table};
-    let config = StudyConfig {
-        trial: "occlusion".into(),
-        sizes: vec![0.7],
-        pairs: Some(120),
-        samples: 40,
-        schedule: Schedule {
-            sensing: qlink::Sensing::AtStops { degrees: 30.0 },
-            fallbacks: 0,
-        },
-        occlusion_schedules: vec![Schedule::CONTINUOUS],
-        schedule_pairs: Some(120),
-        ..StudyConfig::quick(2)
-    };
-    let (records, _) = run_study(&config, &|| {}).unwrap();
-    let rows = table(&records);
-    assert_eq!(rows.len(), 2);
-    let sparse = &rows[0];
-    let dense = &rows[1];
-    assert!(sparse.failures > 0, "{sparse:?}");
-    assert!(
-        sparse.failure_rate > dense.failure_rate,
-        "{sparse:?} vs {dense:?}"
     );
 }
 

@@ -21,6 +21,7 @@ mod pool;
 mod reasoning;
 mod regions;
 mod simulation;
+mod study_runner;
 
 use pyo3::prelude::*;
 
@@ -32,6 +33,9 @@ fn _qrm(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<binary::BinaryCalculus>()?;
     m.add_function(wrap_pyfunction!(binary::reason_close_binary, m)?)?;
     m.add_class::<mapping::Pqrm>()?;
+    m.add_function(wrap_pyfunction!(study_runner::studies_list, m)?)?;
+    m.add_function(wrap_pyfunction!(study_runner::studies_config, m)?)?;
+    m.add_function(wrap_pyfunction!(study_runner::studies_run, m)?)?;
     m.add_function(wrap_pyfunction!(mapping::read_observations, m)?)?;
     m.add_function(wrap_pyfunction!(mapping::single_observation, m)?)?;
     m.add_function(wrap_pyfunction!(mapping::monte_carlo_shard, m)?)?;

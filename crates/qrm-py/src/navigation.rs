@@ -10,6 +10,8 @@ use qlink::{
     RangePerception, SearchPomdp,
 };
 
+use studies::StudyError;
+
 use crate::calculus::Calculus;
 use crate::errors::{InvalidInput, QrmError, invalid, pqrm, qsr};
 use crate::mapping::Pqrm;
@@ -20,13 +22,27 @@ pub(crate) fn qlink_err(e: QlinkError) -> PyErr {
     match e {
         QlinkError::Calculus(inner) => qsr(inner),
         QlinkError::Pqrm(inner) => pqrm(inner),
-        QlinkError::Sim(_) => QrmError::new_err(msg),
         QlinkError::UnknownLandmark(_)
         | QlinkError::SameStartGoal(_)
         | QlinkError::EmptyMap
         | QlinkError::InvalidParameter(_) => InvalidInput::new_err(msg),
         QlinkError::NoPath { .. } => QrmError::new_err(msg),
         QlinkError::Unsupported(_) => crate::errors::UnsupportedError::new_err(msg),
+        _ => QrmError::new_err(msg),
+    }
+}
+
+/// The Python exception for a study's error: its cause's, or `InvalidInput` for a refused
+/// configuration.
+pub(crate) fn study_err(e: StudyError) -> PyErr {
+    let msg = crate::errors::chain(&e);
+    match e {
+        StudyError::Qlink(inner) => qlink_err(inner),
+        StudyError::Serge(inner) => crate::regions::serge_err(inner),
+        StudyError::Pqrm(inner) => pqrm(inner),
+        StudyError::Calculus(inner) => qsr(inner),
+        StudyError::Sim(inner) => crate::simulation::sim_err(inner),
+        StudyError::InvalidParameter(_) => InvalidInput::new_err(msg),
         _ => QrmError::new_err(msg),
     }
 }
@@ -109,18 +125,18 @@ pub(crate) fn qlink_field(
     seed: u64,
     progress: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<String> {
-    crate::pool::watched(py, progress, move |watch| -> Result<String, QlinkError> {
+    crate::pool::watched(py, progress, move |watch| -> Result<String, StudyError> {
         let mut params = if quick {
-            qlink::field::FieldParams::quick(seed)
+            studies::qlink::field::FieldParams::quick(seed)
         } else {
-            qlink::field::FieldParams::full(seed)
+            studies::qlink::field::FieldParams::full(seed)
         };
         if let Some(n) = trials {
             params.trials = n;
         }
-        let variants = qlink::field::FieldVariant::ALL;
-        let (field, draws, ts) = qlink::field::run_field(&params, &variants, watch)?;
-        let summaries = qlink::field::summarise(&ts, &variants);
+        let variants = studies::qlink::field::FieldVariant::ALL;
+        let (field, draws, ts) = studies::qlink::field::run_field(&params, &variants, watch)?;
+        let summaries = studies::qlink::field::summarise(&ts, &variants);
         let rows: Vec<serde_json::Value> = ts
             .iter()
             .map(|t| {
@@ -136,9 +152,9 @@ pub(crate) fn qlink_field(
         serde_json::to_string(&serde_json::json!({
             "mapping": field.stats, "draws": draws, "variants": summaries, "trials": rows,
         }))
-        .map_err(|e| QlinkError::InvalidParameter(e.to_string()))
+        .map_err(|e| StudyError::InvalidParameter(e.to_string()))
     })?
-    .map_err(qlink_err)
+    .map_err(study_err)
 }
 
 /// The §4.4.1 study (quick or full) for `trial` = sensor-range, occlusion or all; returns
@@ -154,21 +170,21 @@ pub(crate) fn qlink_study(
     seed: u64,
     progress: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<String> {
-    let trial = trial.to_owned();
-    crate::pool::watched(py, progress, move |watch| -> Result<String, QlinkError> {
+    let trial: studies::qlink::table_4_1::Trials = trial.parse().map_err(study_err)?;
+    crate::pool::watched(py, progress, move |watch| -> Result<String, StudyError> {
         let mut config = if quick {
-            qlink::study::StudyConfig::quick(seed)
+            studies::qlink::table_4_1::StudyConfig::quick(seed)
         } else {
-            qlink::study::StudyConfig::full(seed)
+            studies::qlink::table_4_1::StudyConfig::full(seed)
         };
         config.trial = trial;
         if pairs.is_some() {
             config.pairs = pairs;
         }
-        let (records, _) = qlink::study::run_study(&config, watch)?;
-        let table = qlink::study::table(&records);
+        let (records, _) = studies::qlink::table_4_1::run_study(&config, watch)?;
+        let table = studies::qlink::table_4_1::table(&records);
         serde_json::to_string(&serde_json::json!({"table": table, "records": records}))
-            .map_err(|e| QlinkError::InvalidParameter(e.to_string()))
+            .map_err(|e| StudyError::InvalidParameter(e.to_string()))
     })?
-    .map_err(qlink_err)
+    .map_err(study_err)
 }

@@ -232,17 +232,17 @@ pub(crate) fn serge_cross_validate(
     let name = dataset.to_owned();
     let records = crate::pool::watched(py, progress, move |watch| {
         let config = if quick {
-            serge::study::StudyConfig::quick(seed)
+            studies::serge::cross_validation::StudyConfig::quick(seed)
         } else {
-            serge::study::StudyConfig::full(seed)
+            studies::serge::cross_validation::StudyConfig::full(seed)
         };
-        let mut data = serge::datasets::Dataset::generate(&name, seed)?;
+        let mut data = studies::serge::datasets::Dataset::generate(&name, seed)?;
         if data.observations.is_some() {
             data = data.with_samples(config.samples);
         }
-        serge::study::cross_validate(&data, &config, watch)
+        studies::serge::cross_validation::cross_validate(&data, &config, watch)
     })?
-    .map_err(serge_err)?;
+    .map_err(crate::navigation::study_err)?;
     serde_json::to_string(&records).map_err(|e| invalid(e.to_string()))
 }
 

@@ -6,7 +6,7 @@ use pyo3::types::PyDict;
 
 use crate::errors::invalid;
 
-fn sim_err(e: sim2d::SimError) -> PyErr {
+pub(crate) fn sim_err(e: sim2d::SimError) -> PyErr {
     match e {
         sim2d::SimError::UnknownScenario(_) => crate::errors::SpecError::new_err(e.to_string()),
         other => invalid(other.to_string()),

@@ -53,7 +53,6 @@
 pub mod baseline;
 mod belief;
 pub mod bvn;
-pub mod datasets;
 mod error;
 mod grid;
 mod init;
@@ -61,7 +60,6 @@ pub mod learn;
 mod map;
 #[allow(clippy::module_inception)]
 mod serge;
-pub mod study;
 mod tree;
 
 pub use belief::{Belief, BeliefSet};

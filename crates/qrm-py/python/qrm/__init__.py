@@ -6,7 +6,8 @@ files (`read_observations`) and the thesis's Monte Carlo study, sharded for dist
 region maps and learned calculi (`serge`, `SalientRegionMap`, `compose_cells`,
 `serge_cross_validate`); navigation with Q-Link (`navigate`, `qlink_study`,
 `qlink_field`); qualitative reasoning (`reason.close`, `reason.scenario`, `Pqrm.infer`,
-`Pqrm.check`).
+`Pqrm.check`); every thesis study through one runner, as `qrm study` runs them
+(`studies.available`, `studies.config`, `studies.run`).
 
 Every error is a `QrmError`; the subclasses say what kind and are also the builtin a caller
 would catch (`InvalidInput` is a `ValueError`, `IoError` an `OSError`; see the stubs).
@@ -72,6 +73,7 @@ __all__ = [
     "serge_cross_validate",
     "sim",
     "single_observation",
+    "studies",
     "to_pandas",
     "types",
     "worker_threads",
@@ -306,3 +308,7 @@ def to_pandas(table: Union[Sequence[Mapping[str, Any]], Mapping[str, Sequence[An
     if isinstance(table, Mapping):
         return pd.DataFrame(dict(table))
     return pd.DataFrame(list(table))
+
+
+# Last: `studies` uses `_progress_callback` and `Progress` from above.
+from . import studies  # noqa: E402

@@ -8,7 +8,7 @@ test suite checks every result's keys against them.
 """
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Dict, List, Literal, Optional, Tuple, TypedDict, Union
+from typing import TYPE_CHECKING, Any, Dict, List, Literal, Optional, Tuple, TypedDict, Union
 
 if TYPE_CHECKING:  # Python 3.10+; annotations are not evaluated at run time here
     from typing import TypeAlias
@@ -455,3 +455,97 @@ class FieldExperiment(TypedDict):
     draws: TaskDraws
     variants: List[FieldSummary]
     trials: List[FieldTrial]
+
+
+# --- studies (`qrm.studies`): the report every study returns --------------------------------
+
+StudyVerdict: TypeAlias = Union[Literal["agree"], Literal["disagree"], Literal["holds"], Literal["violated"]]
+
+
+class ReportClaim(TypedDict):
+    """One thing the thesis says, what we measured, and the computed verdict."""
+
+    what: str
+    thesis: str
+    ours: str
+    verdict: StudyVerdict
+    why: str
+
+
+class ReportCell(TypedDict):
+    """A table cell: its CSV field (full precision, empty when missing) and its text."""
+
+    csv: str
+    text: str
+
+
+class ReportColumn(TypedDict):
+    """A table column: CSV key, heading, and where it is shown."""
+
+    key: str
+    heading: str
+    shown: Union[Literal["everywhere"], Literal["csv-only"], Literal["human-only"]]
+
+
+class ReportTable(TypedDict):
+    """A table defined once (`name` is its CSV's stem)."""
+
+    name: str
+    title: str
+    caption: str
+    columns: List[ReportColumn]
+    rows: List[List[ReportCell]]
+    in_report: bool
+
+
+class ReportLine(TypedDict):
+    """A series of a line chart."""
+
+    name: str
+    points: List[Tuple[float, float]]
+    reference: bool
+
+
+class HistogramPlot(TypedDict):
+    """Histograms over shared bin edges."""
+
+    kind: Literal["histogram"]
+    edges: List[float]
+    groups: List[Tuple[str, List[float]]]
+
+
+class LinesPlot(TypedDict):
+    """Lines."""
+
+    kind: Literal["lines"]
+    series: List[ReportLine]
+
+
+class ReportFigure(TypedDict):
+    """A figure's data (the CLI draws it as SVG and PNG)."""
+
+    name: str
+    title: str
+    x_label: str
+    y_label: str
+    plot: Union[HistogramPlot, LinesPlot]
+
+
+class Report(TypedDict):
+    """What a study says about a run (`qrm.studies.run(...)["report"]`)."""
+
+    title: str
+    setup: str
+    tables: List[ReportTable]
+    claims: List[ReportClaim]
+    figures: List[ReportFigure]
+    notes: str
+
+
+class StudyRun(TypedDict):
+    """A run of `qrm.studies.run`: the config it ran, its output (the study's records and
+    summaries) and its report."""
+
+    config: Dict[str, Any]
+    output: Dict[str, Any]
+    report: Report

@@ -4,7 +4,7 @@
 //! a robot with range R = 20 m and detection noise N(0, 0.3) into a PQRM with the `quadrant`
 //! calculus; a Link Graph with β = 1 and unit costs; the arc controller driving arcs and
 //! fallback circles of radius R whatever the sensor range R' (§4.4.1); a horizon-4 search
-//! POMDP; the thesis's robot of [`crate::execution`] (unseen references where last seen,
+//! POMDP; the thesis's robot of [`qlink::execution`] (unseen references where last seen,
 //! arrival on the next frame's references), idealised options named in [`StudyConfig`]. Every ordered (start, goal) landmark pair is navigated (39,800 of them) for sensor
 //! ranges R'/R ∈ {1, 0.9, 0.8, 0.7, 0.6} without occlusion, and for landmark sizes
 //! {0.1, 0.3, 0.5, 0.7} m with full occlusion at R' = R. A navigation fails when a transition
@@ -19,15 +19,19 @@ use qsr_core::progress::Progress;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
-use crate::controller::{Controller, ControllerKind};
-use crate::error::{QlinkError, Result};
-use crate::execution::{Arrival, References, Sensing};
-use crate::graph::{DistanceField, LinkGraph};
-use crate::map::QualitativeMap;
-use crate::navigate::{
-    Failure, NavConfig, NavOutcome, Navigator, Perception, RangePerception, WorldPerception,
+use qlink::{
+    Arrival, Controller, ControllerKind, DistanceField, Failure, LinkGraph, NavConfig, NavOutcome,
+    Navigator, Perception, QlinkError, QualitativeMap, RangePerception, References, SearchPomdp,
+    Sensing,
 };
-use crate::pomdp::SearchPomdp;
+
+pub mod report;
+
+pub use report::{Output, THESIS_FAILURE_RATES, Table41, thesis_failure_rate};
+
+use crate::error::{Result, StudyError};
+pub use crate::verdict::Trend;
+use crate::world_perception::WorldPerception;
 
 /// The mapping robot's range R (m).
 pub const MAP_RANGE: f64 = 20.0;
@@ -76,11 +80,83 @@ pub enum ArcRadius {
     SensorRange,
 }
 
+/// A trial of Table 4.1.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Trial {
+    /// The navigating robot's range R' below the mapping robot's R, point landmarks.
+    SensorRange,
+    /// Landmarks as discs that hide each other, R' = R.
+    Occlusion,
+}
+
+impl Trial {
+    /// `sensor-range` or `occlusion`, as in files and on the command line.
+    #[must_use]
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Self::SensorRange => "sensor-range",
+            Self::Occlusion => "occlusion",
+        }
+    }
+}
+
+impl std::fmt::Display for Trial {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.as_str())
+    }
+}
+
+/// Which trials a run of the study covers.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Trials {
+    /// Both, as Table 4.1.
+    #[default]
+    All,
+    /// Only the sensor-range trial.
+    SensorRange,
+    /// Only the occlusion trial (with its further schedules).
+    Occlusion,
+}
+
+impl Trials {
+    /// The names accepted by [`Trials::from_str`](std::str::FromStr).
+    pub const NAMES: [&'static str; 3] = ["all", "sensor-range", "occlusion"];
+
+    /// Whether `trial` is run.
+    #[must_use]
+    pub fn includes(self, trial: Trial) -> bool {
+        match self {
+            Self::All => true,
+            Self::SensorRange => trial == Trial::SensorRange,
+            Self::Occlusion => trial == Trial::Occlusion,
+        }
+    }
+}
+
+impl std::str::FromStr for Trials {
+    type Err = StudyError;
+    fn from_str(s: &str) -> Result<Self> {
+        match s {
+            "all" => Ok(Self::All),
+            "sensor-range" => Ok(Self::SensorRange),
+            "occlusion" => Ok(Self::Occlusion),
+            _ => Err(StudyError::InvalidParameter(format!(
+                "unknown trial `{s}` ({})",
+                Self::NAMES.join(", ")
+            ))),
+        }
+    }
+}
+
 /// What the study runs.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct StudyConfig {
-    /// `sensor-range`, `occlusion` or `all`.
-    pub trial: String,
+    /// The trials run.
+    #[serde(default)]
+    pub trial: Trials,
     /// Ordered pairs per setting (`None`: all 39,800).
     pub pairs: Option<usize>,
     /// R'/R of the sensor-range trial.
@@ -120,8 +196,8 @@ fn continuous() -> Schedule {
 /// One setting of the study: a trial at a value under a schedule.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Setting {
-    /// `sensor-range` or `occlusion`.
-    pub trial: String,
+    /// The trial.
+    pub trial: Trial,
     /// R'/R or the landmark size (m).
     pub value: f64,
     /// Sensing and fallbacks.
@@ -135,7 +211,7 @@ impl StudyConfig {
     #[must_use]
     pub fn full(seed: u64) -> Self {
         Self {
-            trial: "all".into(),
+            trial: Trials::All,
             pairs: None,
             range_factors: vec![1.0, 0.9, 0.8, 0.7, 0.6],
             sizes: vec![0.1, 0.3, 0.5, 0.7],
@@ -179,11 +255,11 @@ impl StudyConfig {
     /// further schedule.
     ///
     /// # Errors
-    /// [`QlinkError::InvalidParameter`] for an unknown trial name, zero pairs (an empty table
+    /// [`StudyError::InvalidParameter`] for zero pairs (an empty table
     /// is not a result), no settings, or a non-positive/non-finite setting, sample count,
     /// step or sensing angle.
     pub fn settings(&self) -> Result<Vec<Setting>> {
-        let bad = |m: String| Err(QlinkError::InvalidParameter(m));
+        let bad = |m: String| Err(StudyError::InvalidParameter(m));
         if self.pairs == Some(0) || self.schedule_pairs == Some(0) {
             return bad("pairs must be >= 1 (or all)".into());
         }
@@ -210,34 +286,38 @@ impl StudyConfig {
         for s in std::iter::once(&self.schedule).chain(&self.occlusion_schedules) {
             s.sensing.check()?;
         }
-        let main = |trial: &str, value: f64| Setting {
-            trial: trial.to_owned(),
+        let main = |trial: Trial, value: f64| Setting {
+            trial,
             value,
             schedule: self.schedule,
             pairs: self.pairs,
         };
-        let range = self.range_factors.iter().map(|&v| main("sensor-range", v));
-        let occ = self.sizes.iter().map(|&v| main("occlusion", v));
+        let range = self
+            .range_factors
+            .iter()
+            .map(|&v| main(Trial::SensorRange, v));
+        let occ = self.sizes.iter().map(|&v| main(Trial::Occlusion, v));
         let extra = self.occlusion_schedules.iter().flat_map(|&schedule| {
             self.sizes.iter().map(move |&value| Setting {
-                trial: "occlusion".to_owned(),
+                trial: Trial::Occlusion,
                 value,
                 schedule,
                 pairs: self.schedule_pairs.or(self.pairs),
             })
         });
-        let v: Vec<Setting> = match self.trial.as_str() {
-            "sensor-range" => range.collect(),
-            "occlusion" => occ.chain(extra).collect(),
-            "all" => range.chain(occ).chain(extra).collect(),
-            t => {
-                return bad(format!(
-                    "unknown trial `{t}` (sensor-range, occlusion, all)"
-                ));
-            }
+        let v: Vec<Setting> = match self.trial {
+            Trials::SensorRange => range.collect(),
+            Trials::Occlusion => occ.chain(extra).collect(),
+            Trials::All => range.chain(occ).chain(extra).collect(),
         };
         if v.is_empty() {
-            return bad(format!("trial `{}` has no settings to run", self.trial));
+            return bad(format!(
+                "trial `{}` has no settings to run",
+                serde_json::to_value(self.trial)
+                    .ok()
+                    .and_then(|v| v.as_str().map(str::to_owned))
+                    .unwrap_or_default()
+            ));
         }
         Ok(v)
     }
@@ -264,7 +344,7 @@ impl StudyConfig {
     /// The idealised options this study runs with (empty: the thesis's robot).
     #[must_use]
     pub fn idealised(&self) -> Vec<&'static str> {
-        let mut out = crate::execution::idealised(self.references, self.arrival);
+        let mut out = qlink::execution::idealised(self.references, self.arrival);
         if self.radius == ArcRadius::SensorRange {
             out.push("arcs and circles of the sensor's R', not the mapping robot's R");
         }
@@ -275,7 +355,7 @@ impl StudyConfig {
 /// The navigating robot's sensor range in a setting (m).
 #[must_use]
 pub fn sensor_range(setting: &Setting) -> f64 {
-    if setting.trial == "sensor-range" {
+    if setting.trial == Trial::SensorRange {
         setting.value * MAP_RANGE
     } else {
         MAP_RANGE
@@ -285,8 +365,8 @@ pub fn sensor_range(setting: &Setting) -> f64 {
 /// One navigation of the study.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct TrialRecord {
-    /// `sensor-range` or `occlusion`.
-    pub trial: String,
+    /// The trial.
+    pub trial: Trial,
     /// R'/R or the landmark size.
     pub value: f64,
     /// Sensing and fallbacks.
@@ -445,7 +525,7 @@ fn run_pairs<P: Perception>(
 ) -> Result<Vec<TrialRecord>> {
     let nav = Navigator::new(&world.map, &world.graph, perception, config)?;
     // start beside the start landmark, clear of its disc in the occlusion trial
-    let offset = if setting.trial == "occlusion" {
+    let offset = if setting.trial == Trial::Occlusion {
         setting.value + 0.5
     } else {
         0.5
@@ -466,7 +546,7 @@ fn run_pairs<P: Perception>(
             };
             progress.tick();
             Ok(TrialRecord {
-                trial: setting.trial.clone(),
+                trial: setting.trial,
                 value: setting.value,
                 schedule: setting.schedule,
                 start: s,
@@ -487,7 +567,7 @@ fn run_pairs<P: Perception>(
 /// that landmark size).
 ///
 /// # Errors
-/// Navigation errors; [`QlinkError::InvalidParameter`] for an unknown trial.
+/// Navigation errors.
 pub fn run_setting(
     world: &StudyWorld,
     config: &StudyConfig,
@@ -498,16 +578,15 @@ pub fn run_setting(
 ) -> Result<Vec<TrialRecord>> {
     let nav = config.nav_config(setting)?;
     let range = sensor_range(setting);
-    match setting.trial.as_str() {
-        "sensor-range" => {
+    match setting.trial {
+        Trial::SensorRange => {
             let perception = RangePerception::new(&world.landmarks, range);
             run_pairs(world, &perception, &nav, pairs, fields, setting, progress)
         }
-        "occlusion" => {
+        Trial::Occlusion => {
             let perception = WorldPerception::new(&world.scenario.world, range);
             run_pairs(world, &perception, &nav, pairs, fields, setting, progress)
         }
-        t => Err(QlinkError::InvalidParameter(format!("unknown trial `{t}`"))),
     }
 }
 
@@ -515,7 +594,7 @@ pub fn run_setting(
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct TableRow {
     /// Trial.
-    pub trial: String,
+    pub trial: Trial,
     /// R'/R or size.
     pub value: f64,
     /// Sensing and fallbacks.
@@ -537,8 +616,8 @@ pub struct TableRow {
 /// Table 4.1 from records: one row per (trial, value, schedule), in the records' order.
 #[must_use]
 pub fn table(records: &[TrialRecord]) -> Vec<TableRow> {
-    let key = |r: &TrialRecord| (r.trial.clone(), r.value.to_bits(), r.schedule.to_string());
-    let mut keys: Vec<(String, u64, String)> = Vec::new();
+    let key = |r: &TrialRecord| (r.trial, r.value.to_bits(), r.schedule.to_string());
+    let mut keys: Vec<(Trial, u64, String)> = Vec::new();
     for r in records {
         let k = key(r);
         if !keys.contains(&k) {
@@ -581,7 +660,7 @@ pub fn table(records: &[TrialRecord]) -> Vec<TableRow> {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct SettingInfo {
     /// Trial.
-    pub trial: String,
+    pub trial: Trial,
     /// R'/R or size.
     pub value: f64,
     /// Sensing and fallbacks.
@@ -621,7 +700,7 @@ pub fn run_study(
     for setting in &settings {
         progress.check()?;
         let t = std::time::Instant::now();
-        let size = (setting.trial == "occlusion").then_some(setting.value);
+        let size = (setting.trial == Trial::Occlusion).then_some(setting.value);
         let key = size.map(f64::to_bits);
         if !worlds.iter().any(|w| w.0 == key) {
             let w = build_world(config.seed, config.samples, size)?;
@@ -646,56 +725,12 @@ pub fn run_study(
             edges: world.graph.n_edges(),
             build_seconds,
             navigate_seconds: tn.elapsed().as_secs_f64(),
-            trial: setting.trial.clone(),
+            trial: setting.trial,
             value: setting.value,
             schedule: setting.schedule,
         });
     }
     Ok((records, infos))
-}
-
-/// The direction of a series, as a report states it.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "kebab-case")]
-pub enum Trend {
-    /// Never falls, and rises overall by more than the tolerance.
-    Rises,
-    /// Never rises, and falls overall by more than the tolerance.
-    Falls,
-    /// Every value within the tolerance of the first.
-    Flat,
-    /// Rises and falls.
-    Mixed,
-}
-
-impl Trend {
-    /// The trend of `values` in order; steps within `tolerance` count as level.
-    #[must_use]
-    pub fn of(values: &[f64], tolerance: f64) -> Self {
-        let first = values.first().copied().unwrap_or(0.0);
-        if values.iter().all(|v| (v - first).abs() <= tolerance) {
-            return Self::Flat;
-        }
-        let up = values.windows(2).any(|w| w[1] > w[0] + tolerance);
-        let down = values.windows(2).any(|w| w[1] < w[0] - tolerance);
-        match (up, down) {
-            (true, false) => Self::Rises,
-            (false, true) => Self::Falls,
-            (false, false) => Self::Flat,
-            (true, true) => Self::Mixed,
-        }
-    }
-
-    /// "rises", "falls", "is flat", "rises and falls".
-    #[must_use]
-    pub fn phrase(self) -> &'static str {
-        match self {
-            Self::Rises => "rises",
-            Self::Falls => "falls",
-            Self::Flat => "is flat",
-            Self::Mixed => "rises and falls",
-        }
-    }
 }
 
 /// Mean trajectory length of the successful runs of `records` selected by `of`, per |P|,
@@ -735,19 +770,14 @@ pub fn matched_length(
 mod tests {
     use super::*;
 
-    #[test]
-    fn a_flat_series_is_flat_not_growing() {
-        // issue 14/18: "0.0 % → 0.0 % → 0.0 % → 0.0 %" was reported as growing
-        assert_eq!(Trend::of(&[0.0, 0.0, 0.0, 0.0], 1e-9), Trend::Flat);
-        assert_eq!(Trend::of(&[0.0, 0.01, 0.01, 0.2], 1e-9), Trend::Rises);
-        assert_eq!(Trend::of(&[0.3, 0.2, 0.2], 1e-9), Trend::Falls);
-        assert_eq!(Trend::of(&[0.1, 0.3, 0.2], 1e-9), Trend::Mixed);
-        assert_eq!(Trend::of(&[0.1, 0.1005, 0.1], 0.001), Trend::Flat);
-    }
-
     fn rec(trial: &str, plan_len: usize, length: f64) -> TrialRecord {
         TrialRecord {
-            trial: trial.into(),
+            // two groups told apart by the trial
+            trial: if trial == "a" {
+                Trial::SensorRange
+            } else {
+                Trial::Occlusion
+            },
             value: 1.0,
             schedule: Schedule::CONTINUOUS,
             start: 0,
@@ -767,8 +797,9 @@ mod tests {
         // a: longer at every |P| but mostly short plans; b: mostly long plans
         let mut v = vec![rec("a", 1, 20.0), rec("a", 1, 20.0), rec("a", 5, 120.0)];
         v.extend([rec("b", 1, 10.0), rec("b", 5, 100.0), rec("b", 5, 100.0)]);
-        let a = matched_length(&v, &|r| r.trial == "a", &|r| r.trial == "b").unwrap();
-        let b = matched_length(&v, &|r| r.trial == "b", &|r| r.trial == "b").unwrap();
+        let (a_, b_) = (Trial::SensorRange, Trial::Occlusion);
+        let a = matched_length(&v, &|r| r.trial == a_, &|r| r.trial == b_).unwrap();
+        let b = matched_length(&v, &|r| r.trial == b_, &|r| r.trial == b_).unwrap();
         assert!((a - (20.0 + 2.0 * 120.0) / 3.0).abs() < 1e-12);
         assert!((b - 70.0).abs() < 1e-12);
         assert!(a > b, "raw means would say the opposite");

@@ -62,13 +62,13 @@ use sim2d::{
     CandidateKind, ExtractorConfig, Hit, LidarConfig, Pose, TriangleRecognizer, World, extract,
 };
 
-use crate::bounds::{BoundCheck, Geometry};
-use crate::controller::{Controller, ControllerKind};
-use crate::error::{QlinkError, Result};
-use crate::graph::{CostModel, LinkGraph, pomdp_cost};
-use crate::map::{Layer, QualitativeMap};
-use crate::navigate::{Failure, NavConfig, NavOutcome, Navigator, Perception};
-use crate::pomdp::SearchPomdp;
+use qlink::graph::pomdp_cost;
+use qlink::{
+    BoundCheck, Controller, ControllerKind, CostModel, Failure, Geometry, Layer, LinkGraph,
+    NavConfig, NavOutcome, Navigator, Perception, QlinkError, QualitativeMap, SearchPomdp,
+};
+
+use crate::error::{Result, StudyError};
 
 /// Virtual landmark id of the walls' frame origin (midpoint of the walls' start points).
 pub const WALL_FRAME_START: u32 = 1_000_000;
@@ -139,18 +139,18 @@ impl FieldParams {
     fn validate(&self) -> Result<()> {
         let positive = |v: f64| v.is_finite() && v > 0.0;
         if self.trials == 0 || self.samples == 0 || self.horizon == 0 {
-            return Err(QlinkError::InvalidParameter(
+            return Err(StudyError::InvalidParameter(
                 "trials, samples and horizon must be ≥ 1".into(),
             ));
         }
         if !(self.range_sigma.is_finite() && self.range_sigma >= 0.0) {
-            return Err(QlinkError::InvalidParameter(format!(
+            return Err(StudyError::InvalidParameter(format!(
                 "range noise {} m must be ≥ 0",
                 self.range_sigma
             )));
         }
         if !positive(self.sigma) || !positive(self.tolerance) || !positive(self.step) {
-            return Err(QlinkError::InvalidParameter(format!(
+            return Err(StudyError::InvalidParameter(format!(
                 "σ = {}, tolerance = {} and step = {} must be positive",
                 self.sigma, self.tolerance, self.step
             )));
@@ -274,7 +274,7 @@ pub fn wall_calculus() -> Result<Calculus> {
 fn wall_frame(world: &World) -> Result<[[f64; 2]; 2]> {
     let walls = &world.spec().walls;
     let [w1, w2] = walls.as_slice() else {
-        return Err(QlinkError::InvalidParameter(format!(
+        return Err(StudyError::InvalidParameter(format!(
             "the field experiment needs exactly two walls, the world has {}",
             walls.len()
         )));
@@ -752,7 +752,7 @@ pub struct TaskDraws {
 /// the thesis ran were of that kind; how many draws were redrawn and why is returned.
 ///
 /// # Errors
-/// [`QlinkError::EmptyMap`] when no mapped landmark is real; [`QlinkError::InvalidParameter`]
+/// [`QlinkError::EmptyMap`] when no mapped landmark is real; [`StudyError::InvalidParameter`]
 /// when 1000 draws per trial found too few pairs.
 pub fn tasks(field: &FieldMap, params: &FieldParams) -> Result<(Vec<FieldTask>, TaskDraws)> {
     let graph = LinkGraph::new(&field.map, params.beta, |_, _, _| 1.0)?;
@@ -769,7 +769,7 @@ pub fn tasks(field: &FieldMap, params: &FieldParams) -> Result<(Vec<FieldTask>, 
         .filter(|(id, _)| *id != WALL_FRAME_START && *id != WALL_FRAME_END)
         .collect();
     if goals.is_empty() {
-        return Err(QlinkError::EmptyMap);
+        return Err(QlinkError::EmptyMap.into());
     }
     let clear = |p: [f64; 2]| clear_of(spec, p, 1.0);
     let mut out = Vec::with_capacity(params.trials);
@@ -778,7 +778,7 @@ pub fn tasks(field: &FieldMap, params: &FieldParams) -> Result<(Vec<FieldTask>, 
     while out.len() < params.trials {
         attempts += 1;
         if attempts > 1000 * params.trials {
-            return Err(QlinkError::InvalidParameter(
+            return Err(StudyError::InvalidParameter(
                 "could not draw start/goal pairs: no goal out of view from any start".into(),
             ));
         }
@@ -902,7 +902,7 @@ pub fn bound_checks(
         drivable: &drivable,
     };
     [lidar.max_range, field.stats.effective_range]
-        .map(|r| crate::bounds::check(&field.map, plan, made, r, false, transit_length, &geometry))
+        .map(|r| qlink::bounds::check(&field.map, plan, made, r, false, transit_length, &geometry))
 }
 
 fn seg_dist(p: [f64; 2], a: [f64; 2], b: [f64; 2]) -> f64 {
@@ -932,7 +932,7 @@ pub fn field_graph(
         .layers()
         .iter()
         .map(|l| SearchPomdp::new(l.calculus(), true, 0.9, 0.9, params.horizon))
-        .collect::<Result<_>>()?;
+        .collect::<qlink::Result<_>>()?;
     let graph = if variant.visibility_costs() {
         let map = &field.map;
         let per_link: BTreeMap<u32, Vec<SearchPomdp>> = map
@@ -943,7 +943,7 @@ pub fn field_graph(
                 let list = pomdps
                     .iter()
                     .map(|q| q.clone().with_p_detect(p))
-                    .collect::<Result<Vec<_>>>()?;
+                    .collect::<qlink::Result<Vec<_>>>()?;
                 Ok((l, list))
             })
             .collect::<Result<_>>()?;
@@ -1334,7 +1334,7 @@ pub fn map_size(field: &FieldMap, params: &FieldParams) -> Result<MapSize> {
         .filter(|&id| id != WALL_FRAME_START && id != WALL_FRAME_END)
         .collect();
     let n = points.len();
-    let is_point = |e: &crate::map::MapElement| {
+    let is_point = |e: &qlink::MapElement| {
         e.landmarks
             .iter()
             .all(|&l| l != WALL_FRAME_START && l != WALL_FRAME_END)

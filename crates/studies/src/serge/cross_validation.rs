@@ -12,10 +12,10 @@ use rand::seq::SliceRandom;
 use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
 
-use crate::datasets::Dataset;
-use crate::error::{Result, SergeError};
-use crate::grid::{CellMasses, Grid};
-use crate::serge::{Serge, SergeParams};
+use serge::{CellMasses, Grid, Serge, SergeParams};
+
+use super::datasets::Dataset;
+use crate::error::{Result, StudyError};
 
 /// What the study runs.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -168,7 +168,7 @@ fn folds_of(dataset: &Dataset, folds: usize, seed: u64) -> Vec<Vec<usize>> {
 /// before each (a cancelled study returns [`SergeError::Cancelled`]).
 ///
 /// # Errors
-/// [`SergeError::InvalidParameter`] for fewer than 2 folds or a belief with fewer points
+/// [`StudyError::InvalidParameter`] for fewer than 2 folds or a belief with fewer points
 /// than folds; SERGE's errors.
 pub fn cross_validate(
     dataset: &Dataset,
@@ -176,10 +176,10 @@ pub fn cross_validate(
     progress: &dyn Progress,
 ) -> Result<Vec<CvRecord>> {
     if config.folds < 2 {
-        return Err(SergeError::InvalidParameter("at least 2 folds".into()));
+        return Err(StudyError::InvalidParameter("at least 2 folds".into()));
     }
     if let Some(k) = dataset.points.iter().position(|p| p.len() < config.folds) {
-        return Err(SergeError::InvalidParameter(format!(
+        return Err(StudyError::InvalidParameter(format!(
             "belief {k} has {} data points, fewer than {} folds",
             dataset.points[k].len(),
             config.folds

@@ -22,9 +22,10 @@ use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, StandardNormal};
 
-use crate::belief::{Belief, BeliefSet};
-use crate::error::{Result, SergeError};
-use crate::learn::{TripletObservation, normalise, triplet_beliefs};
+use serge::learn::{TripletObservation, normalise, triplet_beliefs};
+use serge::{Belief, BeliefSet};
+
+use crate::error::{Result, StudyError};
 
 /// Dataset names accepted by [`Dataset::generate`].
 pub const DATASETS: [&str; 3] = ["well-separated", "hallway", "lab"];
@@ -48,13 +49,13 @@ impl Dataset {
     /// Generates a named dataset.
     ///
     /// # Errors
-    /// [`SergeError::InvalidParameter`] for an unknown name; simulation errors (hallway).
+    /// [`StudyError::InvalidParameter`] for an unknown name; simulation errors (hallway).
     pub fn generate(name: &str, seed: u64) -> Result<Self> {
         match name {
             "well-separated" => Ok(well_separated(seed)),
             "hallway" => hallway(seed, 10_000),
             "lab" => Ok(lab(seed)),
-            _ => Err(SergeError::InvalidParameter(format!(
+            _ => Err(StudyError::InvalidParameter(format!(
                 "unknown dataset `{name}` (known: {})",
                 DATASETS.join(", ")
             ))),
@@ -80,7 +81,7 @@ impl Dataset {
     /// [`SergeError::Empty`] when a belief has no selected point.
     pub fn beliefs(&self, keep: impl Fn(usize, usize) -> bool, seed: u64) -> Result<BeliefSet> {
         match &self.observations {
-            None => BeliefSet::new(
+            None => Ok(BeliefSet::new(
                 self.points
                     .iter()
                     .enumerate()
@@ -93,8 +94,8 @@ impl Dataset {
                             .collect();
                         Belief::fit_gaussian(&sel, 1e-6)
                     })
-                    .collect::<Result<_>>()?,
-            ),
+                    .collect::<serge::Result<_>>()?,
+            )?),
             Some(obs) => {
                 let mut sel: Vec<TripletObservation> = Vec::new();
                 for (k, list) in obs.iter().enumerate() {
@@ -105,7 +106,12 @@ impl Dataset {
                             .map(|(_, o)| *o),
                     );
                 }
-                triplet_beliefs(&sel, obs.len(), self.samples_per_belief, seed)
+                Ok(triplet_beliefs(
+                    &sel,
+                    obs.len(),
+                    self.samples_per_belief,
+                    seed,
+                )?)
             }
         }
     }
@@ -220,7 +226,7 @@ fn lab(seed: u64) -> Dataset {
 
 fn hallway(seed: u64, samples: usize) -> Result<Dataset> {
     let sim_err =
-        |e: sim2d::SimError| SergeError::InvalidParameter(format!("hallway simulation: {e}"));
+        |e: sim2d::SimError| StudyError::InvalidParameter(format!("hallway simulation: {e}"));
     let scenario = sim2d::scenario("hallway", seed, None).map_err(sim_err)?;
     let frames = scenario.run(seed, false).map_err(sim_err)?;
     // triplets (unordered) seen together in ≥ 10 frames
@@ -241,7 +247,7 @@ fn hallway(seed: u64, samples: usize) -> Result<Dataset> {
         .map(|(t, _)| t)
         .collect();
     if candidates.len() < 22 {
-        return Err(SergeError::InvalidParameter(format!(
+        return Err(StudyError::InvalidParameter(format!(
             "the hallway run saw only {} triplets in ≥ 10 frames",
             candidates.len()
         )));

@@ -6,7 +6,8 @@
 //! same problem, same seed and same random merge orders, printed as a per-trial ratio; then
 //! criterion timings of the parts (cell masses, one full run).
 //!
-//! `cargo bench -p serge --bench serge`
+//! `cargo bench -p studies --bench serge` (the lab dataset is a study's; the bench measures
+//! the `serge` crate)
 
 #![allow(clippy::unwrap_used, missing_docs)]
 
@@ -14,8 +15,8 @@ use std::hint::black_box;
 use std::time::Instant;
 
 use criterion::{Criterion, criterion_group};
-use serge::datasets::Dataset;
 use serge::{CellMasses, Grid, Serge, SergeParams, baseline};
+use studies::serge::datasets::Dataset;
 
 fn problem() -> CellMasses {
     let data = Dataset::generate("lab", 0).unwrap();

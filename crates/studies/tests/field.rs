@@ -2,12 +2,12 @@
 //! map, navigation-time perception and the trials' bookkeeping.
 
 use qlink::Perception;
-use qlink::field::{
+use qsr_core::{Calculus, Point2, Segment};
+use rand::{RngExt, SeedableRng};
+use studies::qlink::field::{
     FieldParams, FieldResult, FieldVariant, LidarPerception, WALL_FRAME_END, WALL_FRAME_START,
     map_field, run_field, summarise, tasks, wall_calculus,
 };
-use qsr_core::{Calculus, Point2, Segment};
-use rand::{RngExt, SeedableRng};
 
 /// The wall layer writes front / between / behind for a ternary frame over the walls'
 /// virtual frame points; it must agree with qsr-core's extended frame everywhere.

@@ -1,0 +1,250 @@
+//! `qrm study ...`: every thesis study through one runner. The study itself (config, run,
+//! report with computed verdicts) is in the `studies` crate; here the flags become a config
+//! (stage two of parsing), progress is shown, and the report's tables, figures and markdown
+//! are written.
+
+use std::path::{Path, PathBuf};
+
+use anyhow::{Context, Result, bail};
+use studies::{AnyStudy, Plot, Ran, Report};
+
+use crate::output::{CsvTable, Staging, write_atomic};
+use crate::plot::{Series, histogram, line_chart};
+
+/// `qrm study ...`.
+#[derive(Debug, clap::Subcommand)]
+pub enum StudyCmd {
+    /// The studies there are, one a line.
+    List,
+    /// Print a study's config as TOML, to edit and pass back with `--config`.
+    Config {
+        /// The study (`qrm study list`).
+        name: String,
+        /// The thesis's settings (default: the quick ones).
+        #[arg(long)]
+        full: bool,
+        /// Seed written into the config.
+        #[arg(long, default_value_t = 0)]
+        seed: u64,
+    },
+    /// Run a study: tables as CSV, figures, report.md and the config it ran in `--out`.
+    Run(RunArgs),
+}
+
+/// `qrm study run`.
+#[derive(Debug, clap::Args)]
+pub struct RunArgs {
+    /// The study (`qrm study list`).
+    pub name: String,
+    /// The quick config (a minute or less) instead of the thesis's.
+    #[arg(long)]
+    pub quick: bool,
+    /// A config file (TOML, as `qrm study config NAME` prints): the fields it has replace the
+    /// built-in config's (the full one, or the quick one with --quick).
+    #[arg(long)]
+    pub config: Option<PathBuf>,
+    /// Change one field of the config: `--set pairs=100`, `--set trial=\"occlusion\"`,
+    /// `--set schedule.fallbacks=0` (a TOML value; a bare word is taken as a string).
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    pub set: Vec<String>,
+    /// Seed of the built-in config (ignored with --config, whose seed is its own).
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    /// Output directory.
+    #[arg(long)]
+    pub out: PathBuf,
+}
+
+/// Runs a `qrm study` subcommand.
+pub fn run(cmd: StudyCmd) -> Result<()> {
+    match cmd {
+        StudyCmd::List => {
+            for s in studies::STUDIES {
+                outln!("{:<14} {}", s.name(), s.about())?;
+            }
+            Ok(())
+        }
+        StudyCmd::Config { name, full, seed } => {
+            let study = studies::find(&name)?;
+            outln!("{}", to_toml(&study.config(full, seed))?.trim_end())?;
+            Ok(())
+        }
+        StudyCmd::Run(a) => {
+            let study = studies::find(&a.name)?;
+            let config = config_of(study, &a)?;
+            run_and_write(study, &config, &a.out)
+        }
+    }
+}
+
+/// The config a `qrm study run` asks for: the built-in one or the file's, then each `--set`.
+fn config_of(study: &dyn AnyStudy, a: &RunArgs) -> Result<serde_json::Value> {
+    let mut config = study.config(!a.quick, a.seed);
+    if let Some(path) = &a.config {
+        let text = qsr_core::text_file::read_text(path, qsr_core::text_file::MAX_INPUT_BYTES)
+            .with_context(|| format!("reading {}", path.display()))?;
+        let file: serde_json::Value = toml::from_str(&text)
+            .with_context(|| format!("{}: not a TOML config", path.display()))?;
+        overlay(&mut config, file);
+    }
+    for s in &a.set {
+        set_field(&mut config, s)?;
+    }
+    study.check(&config)?;
+    Ok(config)
+}
+
+/// Replaces the fields of `base` that `top` has, table by table.
+fn overlay(base: &mut serde_json::Value, top: serde_json::Value) {
+    match (base, top) {
+        (serde_json::Value::Object(b), serde_json::Value::Object(t)) => {
+            for (k, v) in t {
+                match b.get_mut(&k) {
+                    Some(slot) if slot.is_object() && v.is_object() => overlay(slot, v),
+                    _ => {
+                        b.insert(k, v);
+                    }
+                }
+            }
+        }
+        (b, t) => *b = t,
+    }
+}
+
+/// Sets `key=value` (dotted key, TOML value or bare string) in a JSON config.
+fn set_field(config: &mut serde_json::Value, assignment: &str) -> Result<()> {
+    let Some((key, raw)) = assignment.split_once('=') else {
+        bail!("--set `{assignment}`: expected KEY=VALUE");
+    };
+    let (key, raw) = (key.trim(), raw.trim());
+    let value: serde_json::Value = toml::from_str::<toml::Table>(&format!("v = {raw}"))
+        .ok()
+        .and_then(|t| t.get("v").cloned())
+        .map_or_else(
+            || Ok(serde_json::Value::String(raw.to_owned())),
+            serde_json::to_value,
+        )?;
+    let mut node = config;
+    let parts: Vec<&str> = key.split('.').collect();
+    for (i, part) in parts.iter().enumerate() {
+        let Some(obj) = node.as_object_mut() else {
+            bail!("--set `{key}`: `{}` is not a table", parts[..i].join("."));
+        };
+        if !obj.contains_key(*part) {
+            let known: Vec<&String> = obj.keys().collect();
+            bail!("--set `{key}`: no field `{part}` (fields: {known:?})");
+        }
+        if i + 1 == parts.len() {
+            obj.insert((*part).to_owned(), value);
+            return Ok(());
+        }
+        node = obj.get_mut(*part).context("the field was just found")?;
+    }
+    bail!("--set `{assignment}`: empty key")
+}
+
+fn to_toml(v: &serde_json::Value) -> Result<String> {
+    // TOML has no null: a field left at `None` is left out and takes its default on reading.
+    fn strip(v: &serde_json::Value) -> serde_json::Value {
+        match v {
+            serde_json::Value::Object(o) => serde_json::Value::Object(
+                o.iter()
+                    .filter(|(_, x)| !x.is_null())
+                    .map(|(k, x)| (k.clone(), strip(x)))
+                    .collect(),
+            ),
+            serde_json::Value::Array(a) => serde_json::Value::Array(a.iter().map(strip).collect()),
+            x => x.clone(),
+        }
+    }
+    toml::to_string(&strip(v)).context("the config as TOML")
+}
+
+/// Runs `config` with a progress bar and writes everything into `out` (staged: nothing is
+/// left half-written on an error or Ctrl-C).
+pub fn run_and_write(study: &dyn AnyStudy, config: &serde_json::Value, out: &Path) -> Result<()> {
+    let stage = Staging::new(out)?;
+    let pb = crate::progress::Bar::new(0, study.name());
+    let ran = study.run(config, &pb)?;
+    pb.finish_and_clear();
+    write_run(stage.path(), &ran)?;
+    print_report(&ran.report)?;
+    outln!("wrote {}", out.display())?;
+    stage.commit()?;
+    Ok(())
+}
+
+/// The files of a run: each table as CSV, each figure (SVG and PNG), report.md, config.toml.
+pub fn write_run(dir: &Path, ran: &Ran) -> Result<()> {
+    let report = &ran.report;
+    for t in &report.tables {
+        let (header, rows) = t.csv_records();
+        let mut csv = CsvTable::new(header)?;
+        for r in rows {
+            csv.row(r)?;
+        }
+        csv.write(&dir.join(format!("{}.csv", t.name)))?;
+    }
+    for f in &report.figures {
+        let stem = dir.join(&f.name);
+        match &f.plot {
+            Plot::Histogram { edges, groups } => {
+                histogram(&stem, &f.title, &f.x_label, edges, groups)?;
+            }
+            Plot::Lines { series } => {
+                let series: Vec<Series> = series
+                    .iter()
+                    .map(|l| {
+                        if l.reference {
+                            Series::reference(l.name.clone(), l.points.clone())
+                        } else {
+                            Series::line(l.name.clone(), l.points.clone())
+                        }
+                    })
+                    .collect();
+                line_chart(&stem, &f.title, &f.x_label, &f.y_label, &series)?;
+            }
+        }
+    }
+    write_atomic(&dir.join("report.md"), report.to_markdown().as_bytes())?;
+    write_atomic(&dir.join("config.toml"), to_toml(&ran.config)?.as_bytes())?;
+    Ok(())
+}
+
+/// The report's tables and claims on the terminal.
+pub fn print_report(report: &Report) -> Result<()> {
+    for t in report.tables.iter().filter(|t| t.in_report) {
+        outln!("{}:\n{}", t.title, t.to_terminal())?;
+    }
+    for c in &report.claims {
+        outln!(
+            "[{}] {}: thesis {}; ours {}",
+            c.verdict.as_str(),
+            c.what,
+            c.thesis,
+            c.ours
+        )?;
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn set_takes_toml_values_dotted_keys_and_bare_words() {
+        let mut c = serde_json::json!({"pairs": 400, "trial": "all", "schedule": {"fallbacks": 1}});
+        set_field(&mut c, "pairs=12").unwrap();
+        set_field(&mut c, "trial=occlusion").unwrap();
+        set_field(&mut c, "schedule.fallbacks = 0").unwrap();
+        assert_eq!(
+            c,
+            serde_json::json!({"pairs": 12, "trial": "occlusion", "schedule": {"fallbacks": 0}})
+        );
+        let e = set_field(&mut c, "pears=3").unwrap_err().to_string();
+        assert!(e.contains("no field `pears`") && e.contains("pairs"), "{e}");
+        assert!(set_field(&mut c, "pairs").is_err());
+        assert!(set_field(&mut c, "pairs.x=1").is_err());
+    }
+}

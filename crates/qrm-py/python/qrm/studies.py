@@ -1,0 +1,85 @@
+"""Every thesis study through one runner — the same configs, runs and reports as `qrm study`
+on the command line (the studies themselves are in the Rust `studies` crate).
+
+    >>> import qrm
+    >>> [name for name, _ in qrm.studies.available()]
+    ['table-4-1']
+    >>> cfg = qrm.studies.config("table-4-1")          # the quick config, a dict to edit
+    >>> cfg["pairs"] = 40
+    >>> run = qrm.studies.run("table-4-1", cfg)        # doctest: +SKIP
+    >>> [c["verdict"] for c in run["report"]["claims"]]  # doctest: +SKIP
+
+A run returns `{"config", "output", "report"}`: the config it ran (every field filled in),
+the study's output (records and summaries) and its report — tables (each cell with its CSV
+field and its text), claims set beside the thesis's with computed verdicts, and the data of
+its figures.
+"""
+
+from __future__ import annotations
+
+import json
+from typing import Any, Dict, List, Mapping, Optional, Tuple
+
+from . import _qrm, types
+from . import _progress_callback, Progress  # noqa: F401  (re-used, not re-exported)
+
+__all__ = ["available", "config", "run", "table_frame"]
+
+
+def available() -> List[Tuple[str, str]]:
+    """`[(name, what it reproduces), ...]` of every study."""
+    return [(n, a) for n, a in _qrm.studies_list()]
+
+
+def config(name: str, *, full: bool = False, seed: int = 0) -> Dict[str, Any]:
+    """The quick (default) or the thesis's full config of study `name`, as a dict to edit and
+    pass to `run`."""
+    result: Dict[str, Any] = json.loads(_qrm.studies_config(name, full, seed))
+    return result
+
+
+def run(
+    name: str,
+    config: Optional[Mapping[str, Any]] = None,
+    *,
+    quick: bool = False,
+    seed: int = 0,
+    progress: Optional[Progress] = None,
+) -> types.StudyRun:
+    """Runs study `name` with `config` (a dict as `config` returns; None: the built-in quick
+    config with `quick=True`, else the thesis's) and returns its config, output and report.
+    A config field of the wrong name or type raises `InvalidInput` naming it. `progress` counts
+    the study's units of work (navigations, trials, folds)."""
+    text = None if config is None else json.dumps(dict(config))
+    result: types.StudyRun = json.loads(
+        _qrm.studies_run(name, text, quick, seed, progress=_progress_callback(progress))
+    )
+    # JSON has no tuples: the (x, y) points and (legend, values) groups become tuples, as typed
+    for figure in result["report"]["figures"]:
+        plot: Any = figure["plot"]
+        if plot["kind"] == "lines":
+            for line in plot["series"]:
+                line["points"] = [tuple(p) for p in line["points"]]
+        else:
+            plot["groups"] = [tuple(g) for g in plot["groups"]]
+    return result
+
+
+def table_frame(report: types.Report, name: str) -> Any:
+    """A report's table `name` as a pandas DataFrame of its CSV fields (numbers in full); pandas
+    is optional: without it this raises ImportError saying how to get it."""
+    try:
+        import pandas as pd  # type: ignore[import-untyped,unused-ignore]
+    except ImportError as e:
+        raise ImportError("qrm.studies.table_frame needs pandas (pip install pandas)") from e
+    import io
+
+    for t in report["tables"]:
+        if t["name"] == name:
+            shown = [i for i, c in enumerate(t["columns"]) if c["shown"] != "human-only"]
+            header = [t["columns"][i]["key"] for i in shown]
+            rows = [[row[i]["csv"] for i in shown] for row in t["rows"]]
+            text = "\n".join(",".join(json.dumps(v) for v in r) for r in [header, *rows])
+            return pd.read_csv(io.StringIO(text))
+    names = [t["name"] for t in report["tables"]]
+    raise KeyError(f"no table {name!r} in the report (tables: {names})")

@@ -1,0 +1,44 @@
+//! # studies — the thesis's experiments, one shape each
+//!
+//! The algorithm crates (`qsr-core`, `pqrm`, `serge`, `qlink`) are what a robot embeds; this
+//! crate is what reproduces the thesis with them: worlds simulated with `sim2d`, the
+//! settings the thesis sweeps, the records of every trial, and reports that set our figures
+//! beside the thesis's with verdicts computed by tested code. The front ends (the `qrm` CLI,
+//! the Python wheel) only parse, show progress, write files and draw.
+//!
+//! ## Why a crate of its own
+//! - **Robots do not compile a simulator.** `qlink` and `serge` know nothing of `sim2d`;
+//!   the simulated perception with occlusion ([`world_perception::WorldPerception`]) and the
+//!   simulated datasets live here.
+//! - **One place for the thesis's numbers and verdicts.** A report's claims are computed
+//!   from the records by functions with tests ([`verdict`]), never typed into a format string
+//!   of a front end.
+//!
+//! ## Layout
+//! | module | thesis | what |
+//! |---|---|---|
+//! | [`qlink::table_4_1`] | §4.4.1, Table 4.1, Figs 4.6–4.7 | navigation failure rate vs sensor range and landmark size |
+//! | [`qlink::field`] | §4.4.2, Table 4.2 | the lidar-only field-site experiment in simulation |
+//! | [`serge::datasets`] | §3.4 | the well-separated, lab and hallway datasets |
+//! | [`serge::cross_validation`] | §3.4, Figs 3.9–3.12 | SERGE cross-validation over μ and σ |
+//!
+//! ## Naming rule
+//! A study's module is named after what the thesis calls it (`table_4_1`, `field`,
+//! `cross_validation`); `run*` runs, `summarise`/`table` reduce records, `report` judges.
+//!
+//! ## Errors
+//! [`StudyError`]: `InvalidParameter` (a configuration refused before any work),
+//! `Cancelled`, and the wrapped errors of the crates a study drives (`Qlink`, `Serge`,
+//! `Pqrm`, `Calculus`, `Sim`).
+
+mod error;
+pub mod qlink;
+pub mod report;
+pub mod serge;
+pub mod study;
+pub mod verdict;
+pub mod world_perception;
+
+pub use error::{Result, StudyError};
+pub use report::{Cell, Claim, Column, Figure, Line, Plot, Report, Table, Verdict};
+pub use study::{AnyStudy, Ran, STUDIES, Study, find};

@@ -1,0 +1,58 @@
+//! The §4.4.1 study (Table 4.1) drives the thesis's robot: regression tests of issue 18
+//! that need the study's simulated worlds (moved here from qlink's tests with the study).
+#![allow(clippy::unwrap_used, missing_docs)]
+
+#[test]
+fn the_study_drives_arcs_of_the_mapping_range_not_the_sensor_range() {
+    // issue 18 §2: the study gave the controller the sensor range R' under test
+    use studies::qlink::table_4_1::{ArcRadius, MAP_RANGE, Setting, StudyConfig};
+    let config = StudyConfig::quick(0);
+    for value in [1.0, 0.8, 0.6] {
+        let setting = Setting {
+            trial: studies::qlink::table_4_1::Trial::SensorRange,
+            value,
+            schedule: config.schedule,
+            pairs: None,
+        };
+        let nav = config.nav_config(&setting).unwrap();
+        assert_eq!(nav.controller.radius, MAP_RANGE, "R' = {value} R");
+        let idealised = StudyConfig {
+            radius: ArcRadius::SensorRange,
+            ..config.clone()
+        };
+        let nav = idealised.nav_config(&setting).unwrap();
+        assert!((nav.controller.radius - value * MAP_RANGE).abs() < 1e-12);
+        assert!(!idealised.idealised().is_empty() && config.idealised().is_empty());
+    }
+}
+
+#[test]
+fn the_occlusion_study_can_fail() {
+    // issue 18 §3: 0 failures in 159,200 occlusion runs — sensing every metre with a full
+    // fallback circle always found a clear sight line. Sensing only at arc ends and circle
+    // stops, without the fallback, it fails; the schedule is a study parameter.
+    use studies::qlink::table_4_1::{Schedule, StudyConfig, run_study, table};
+    let config = StudyConfig {
+        trial: studies::qlink::table_4_1::Trials::Occlusion,
+        sizes: vec![0.7],
+        pairs: Some(120),
+        samples: 40,
+        schedule: Schedule {
+            sensing: qlink::Sensing::AtStops { degrees: 30.0 },
+            fallbacks: 0,
+        },
+        occlusion_schedules: vec![Schedule::CONTINUOUS],
+        schedule_pairs: Some(120),
+        ..StudyConfig::quick(2)
+    };
+    let (records, _) = run_study(&config, &|| {}).unwrap();
+    let rows = table(&records);
+    assert_eq!(rows.len(), 2);
+    let sparse = &rows[0];
+    let dense = &rows[1];
+    assert!(sparse.failures > 0, "{sparse:?}");
+    assert!(
+        sparse.failure_rate > dense.failure_rate,
+        "{sparse:?} vs {dense:?}"
+    );
+}

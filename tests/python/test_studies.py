@@ -1,0 +1,96 @@
+"""`qrm.studies`: every study through the one runner, the same as `qrm study run`."""
+from __future__ import annotations
+
+import csv
+import json
+import subprocess
+
+import pytest
+
+import qrm
+from qrm import types as qt
+from test_types import conforms
+
+
+def small_config() -> dict:
+    cfg = qrm.studies.config("table-4-1", seed=5)
+    cfg.update(
+        trial="sensor-range",
+        pairs=30,
+        schedule_pairs=30,
+        samples=30,
+        range_factors=[1.0, 0.7],
+    )
+    return cfg
+
+
+@pytest.fixture(scope="module")
+def small_run() -> qt.StudyRun:
+    return qrm.studies.run("table-4-1", small_config())
+
+
+def test_the_registry_lists_table_4_1_and_its_configs():
+    names = [n for n, _ in qrm.studies.available()]
+    assert "table-4-1" in names
+    quick, full = qrm.studies.config("table-4-1"), qrm.studies.config("table-4-1", full=True)
+    assert quick["pairs"] == 400 and full["pairs"] is None  # None: all 39,800 pairs
+    assert qrm.studies.config("table-4-1", seed=9)["seed"] == 9
+
+
+def test_a_run_is_typed_and_judged(small_run):
+    conforms(small_run, qt.StudyRun)
+    report = small_run["report"]
+    rows = next(t for t in report["tables"] if t["name"] == "table")["rows"]
+    assert len(rows) == 2  # one per range factor
+    claim = next(c for c in report["claims"] if c["what"].startswith("Failure rate as R'"))
+    ours = [r[6]["csv"] for r in rows]  # failure_rate, in full
+    rising = float(ours[1]) > float(ours[0])
+    assert claim["verdict"] == ("agree" if rising else "disagree"), (claim, ours)
+    assert small_run["config"]["pairs"] == 30
+    assert len(small_run["output"]["records"]) == 60
+
+
+def test_python_and_the_cli_write_the_same_table(small_run, qrm_bin, tmp_path):
+    # the flat fields as TOML; the tables (schedule, references) are the built-in ones
+    toml_lines = []
+    for k, v in small_config().items():
+        if v is None or isinstance(v, dict) or (isinstance(v, list) and isinstance(v[0], dict)):
+            continue
+        toml_lines.append(f"{k} = {json.dumps(v)}")
+    cfg = tmp_path / "cfg.toml"
+    cfg.write_text("\n".join(toml_lines) + "\n")
+    out = tmp_path / "out"
+    subprocess.run(
+        [qrm_bin, "study", "run", "table-4-1", "--config", str(cfg), "--out", str(out)],
+        check=True,
+        capture_output=True,
+    )
+    with open(out / "table.csv", newline="") as f:
+        cli_rows = list(csv.reader(f))
+    table = next(t for t in small_run["report"]["tables"] if t["name"] == "table")
+    keys = [c["key"] for c in table["columns"] if c["shown"] != "human-only"]
+    shown = [i for i, c in enumerate(table["columns"]) if c["shown"] != "human-only"]
+    py_rows = [keys] + [[row[i]["csv"] for i in shown] for row in table["rows"]]
+    assert cli_rows == py_rows
+
+
+def test_a_misspelt_or_mistyped_field_is_refused_by_name():
+    cfg = small_config()
+    cfg["pears"] = 3
+    with pytest.raises(qrm.InvalidInput, match="pears"):
+        qrm.studies.run("table-4-1", cfg)
+    cfg = small_config()
+    cfg["pairs"] = "many"
+    with pytest.raises(qrm.InvalidInput, match="many"):
+        qrm.studies.run("table-4-1", cfg)
+    with pytest.raises(qrm.InvalidInput, match="unknown study"):
+        qrm.studies.run("table-9-9")
+
+
+def test_a_table_becomes_a_data_frame(small_run):
+    pd = pytest.importorskip("pandas")
+    df = qrm.studies.table_frame(small_run["report"], "table")
+    assert isinstance(df, pd.DataFrame)
+    assert list(df["pairs"]) == [30, 30]
+    with pytest.raises(KeyError, match="tables"):
+        qrm.studies.table_frame(small_run["report"], "nope")
