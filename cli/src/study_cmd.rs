@@ -29,11 +29,57 @@ pub enum StudyCmd {
     },
     /// Run a study: tables as CSV, figures, report.md and the config it ran in `--out`.
     Run(RunArgs),
+    /// Run one shard of a study (a world, a fold, a range of trials) and write it as JSON:
+    /// shards run anywhere, in any order, and `qrm study aggregate` merges them into exactly
+    /// the result of `qrm study run`.
+    Shard(ShardArgs),
+    /// Merge shard files written by `qrm study shard` (each exactly once) and write the run's
+    /// files as `qrm study run` does.
+    Aggregate(AggregateArgs),
+}
+
+/// `qrm study shard`.
+#[derive(Debug, clap::Args)]
+pub struct ShardArgs {
+    /// The study's config, as `qrm study run` takes it.
+    #[command(flatten)]
+    pub config: ConfigArgs,
+    /// Which shard (0-based); without it, prints how many shards the config has.
+    #[arg(long)]
+    pub index: Option<usize>,
+    /// The shard's JSON file (required with --index).
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+}
+
+/// `qrm study aggregate`.
+#[derive(Debug, clap::Args)]
+pub struct AggregateArgs {
+    /// The study's config, as the shards ran it.
+    #[command(flatten)]
+    pub config: ConfigArgs,
+    /// The shard files.
+    #[arg(long = "shard", required = true, num_args = 1..)]
+    pub shards: Vec<PathBuf>,
+    /// Output directory.
+    #[arg(long)]
+    pub out: PathBuf,
 }
 
 /// `qrm study run`.
 #[derive(Debug, clap::Args)]
 pub struct RunArgs {
+    /// The study and its config.
+    #[command(flatten)]
+    pub config: ConfigArgs,
+    /// Output directory.
+    #[arg(long)]
+    pub out: PathBuf,
+}
+
+/// A study and its config: the built-in one, a file's fields over it, `--set` over both.
+#[derive(Debug, clap::Args)]
+pub struct ConfigArgs {
     /// The study (`qrm study list`).
     pub name: String,
     /// The quick config (a minute or less) instead of the thesis's.
@@ -47,12 +93,9 @@ pub struct RunArgs {
     /// `--set schedule.fallbacks=0` (a TOML value; a bare word is taken as a string).
     #[arg(long = "set", value_name = "KEY=VALUE")]
     pub set: Vec<String>,
-    /// Seed of the built-in config (ignored with --config, whose seed is its own).
+    /// Seed of the built-in config (a --config file's own seed wins).
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
-    /// Output directory.
-    #[arg(long)]
-    pub out: PathBuf,
 }
 
 /// Runs a `qrm study` subcommand.
@@ -70,15 +113,73 @@ pub fn run(cmd: StudyCmd) -> Result<()> {
             Ok(())
         }
         StudyCmd::Run(a) => {
-            let study = studies::find(&a.name)?;
-            let config = config_of(study, &a)?;
+            let (study, config) = config_of(&a.config)?;
             run_and_write(study, &config, &a.out)
         }
+        StudyCmd::Shard(a) => shard(&a),
+        StudyCmd::Aggregate(a) => aggregate(&a),
     }
 }
 
-/// The config a `qrm study run` asks for: the built-in one or the file's, then each `--set`.
-fn config_of(study: &dyn AnyStudy, a: &RunArgs) -> Result<serde_json::Value> {
+fn shard(a: &ShardArgs) -> Result<()> {
+    let (study, config) = config_of(&a.config)?;
+    let n = study.shards(&config)?;
+    let Some(index) = a.index else {
+        outln!("{n}")?;
+        return Ok(());
+    };
+    let Some(out) = &a.out else {
+        bail!("--index needs --out FILE.json for the shard");
+    };
+    if index >= n {
+        bail!(
+            "--index {index}: `{}` has {n} shards (0..{n})",
+            study.name()
+        );
+    }
+    let pb = crate::progress::Bar::new(0, &format!("{} shard {index}", study.name()));
+    let value = study.run_shard(&config, index, &pb)?;
+    pb.finish_and_clear();
+    let file = serde_json::json!({"study": study.name(), "index": index, "config": config, "shard": value});
+    write_atomic(out, serde_json::to_string(&file)?.as_bytes())?;
+    outln!("wrote shard {index} of {n}: {}", out.display())?;
+    Ok(())
+}
+
+fn aggregate(a: &AggregateArgs) -> Result<()> {
+    let (study, config) = config_of(&a.config)?;
+    let mut shards = Vec::new();
+    for path in &a.shards {
+        let text = qsr_core::text_file::read_text(path, qsr_core::text_file::MAX_INPUT_BYTES)
+            .with_context(|| format!("reading {}", path.display()))?;
+        let file: serde_json::Value = serde_json::from_str(&text)
+            .with_context(|| format!("{}: not a shard file", path.display()))?;
+        if file["study"] != study.name() || file["config"] != config {
+            bail!(
+                "{}: a shard of another study or config (study {}, this run's: {})",
+                path.display(),
+                file["study"],
+                study.name()
+            );
+        }
+        let index = file["index"]
+            .as_u64()
+            .with_context(|| format!("{}: no shard index", path.display()))?;
+        shards.push((usize::try_from(index)?, file["shard"].clone()));
+    }
+    let stage = Staging::new(&a.out)?;
+    let ran = study.aggregate(&config, shards)?;
+    write_run(stage.path(), &ran, None)?;
+    print_report(&ran.report)?;
+    outln!("wrote {}", a.out.display())?;
+    stage.commit()?;
+    Ok(())
+}
+
+/// The study and the config flags ask for (stage two of parsing): the built-in config, the
+/// file's fields over it, then each `--set`; checked before any work.
+fn config_of(a: &ConfigArgs) -> Result<(&'static dyn AnyStudy, serde_json::Value)> {
+    let study = studies::find(&a.name)?;
     let mut config = study.config(!a.quick, a.seed);
     if let Some(path) = &a.config {
         let text = qsr_core::text_file::read_text(path, qsr_core::text_file::MAX_INPUT_BYTES)
@@ -91,7 +192,7 @@ fn config_of(study: &dyn AnyStudy, a: &RunArgs) -> Result<serde_json::Value> {
         set_field(&mut config, s)?;
     }
     study.check(&config)?;
-    Ok(config)
+    Ok((study, config))
 }
 
 /// Replaces the fields of `base` that `top` has, table by table.
@@ -165,17 +266,25 @@ fn to_toml(v: &serde_json::Value) -> Result<String> {
 pub fn run_and_write(study: &dyn AnyStudy, config: &serde_json::Value, out: &Path) -> Result<()> {
     let stage = Staging::new(out)?;
     let pb = crate::progress::Bar::new(0, study.name());
+    let t0 = std::time::Instant::now();
     let ran = study.run(config, &pb)?;
+    let seconds = t0.elapsed().as_secs_f64();
     pb.finish_and_clear();
-    write_run(stage.path(), &ran)?;
+    write_run(stage.path(), &ran, Some(seconds))?;
+    outln!(
+        "{} in {seconds:.1} s on {} threads",
+        study.name(),
+        rayon::current_num_threads()
+    )?;
     print_report(&ran.report)?;
     outln!("wrote {}", out.display())?;
     stage.commit()?;
     Ok(())
 }
 
-/// The files of a run: each table as CSV, each figure (SVG and PNG), report.md, config.toml.
-pub fn write_run(dir: &Path, ran: &Ran) -> Result<()> {
+/// The files of a run: each table as CSV, each figure (SVG and PNG), report.md (with the run
+/// time when it was measured here), config.toml.
+pub fn write_run(dir: &Path, ran: &Ran, seconds: Option<f64>) -> Result<()> {
     let report = &ran.report;
     for t in &report.tables {
         let (header, rows) = t.csv_records();
@@ -195,18 +304,41 @@ pub fn write_run(dir: &Path, ran: &Ran) -> Result<()> {
                 let series: Vec<Series> = series
                     .iter()
                     .map(|l| {
-                        if l.reference {
+                        let s = if l.reference {
                             Series::reference(l.name.clone(), l.points.clone())
                         } else {
                             Series::line(l.name.clone(), l.points.clone())
+                        };
+                        match &l.err {
+                            Some(e) => s.with_err(e.clone()),
+                            None => s,
                         }
                     })
                     .collect();
                 line_chart(&stem, &f.title, &f.x_label, &f.y_label, &series)?;
             }
+            Plot::EdcScatter {
+                points,
+                colour_label,
+            } => {
+                crate::plot::edc_scatter(&stem, &f.title, points, colour_label)?;
+            }
+            Plot::Heatmap { labels, matrix } => {
+                crate::plot::heatmap(&stem, &f.title, labels, matrix)?;
+            }
         }
     }
-    write_atomic(&dir.join("report.md"), report.to_markdown().as_bytes())?;
+    if let Some((name, text)) = &ran.output_file {
+        write_atomic(&dir.join(name), text.as_bytes())?;
+    }
+    let mut md = report.to_markdown();
+    if let Some(s) = seconds {
+        md.push_str(&format!(
+            "\nRun in {s:.1} s on {} threads.\n",
+            rayon::current_num_threads()
+        ));
+    }
+    write_atomic(&dir.join("report.md"), md.as_bytes())?;
     write_atomic(&dir.join("config.toml"), to_toml(&ran.config)?.as_bytes())?;
     Ok(())
 }

@@ -89,7 +89,8 @@ fn the_alias_and_the_runner_write_the_same_files() {
 #[test]
 fn list_config_and_refusals() {
     let list = common::ok(&["study", "list"], "");
-    assert!(list.starts_with("table-4-1 "), "{list}");
+    let names: Vec<&str> = list.lines().filter_map(|l| l.split(' ').next()).collect();
+    assert_eq!(names, ["monte-carlo", "table-4-1"], "{list}");
     let full = common::ok(
         &["study", "config", "table-4-1", "--full", "--seed", "7"],
         "",
@@ -119,5 +120,80 @@ fn list_config_and_refusals() {
         assert!(!out.exists(), "nothing written for a refused config");
     }
     let o = common::qrm(&["study", "run", "table-9-9", "--out", "x"], "");
-    assert!(String::from_utf8_lossy(&o.stderr).contains("studies: table-4-1"));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("studies: monte-carlo, table-4-1"));
+}
+
+#[test]
+fn shards_written_anywhere_aggregate_into_the_run() {
+    let (run, agg, shards) = (dir("mc-run"), dir("mc-agg"), dir("mc-shards"));
+    std::fs::create_dir_all(&shards).unwrap();
+    let config = [
+        "--quick",
+        "--set",
+        "trials=3",
+        "--set",
+        "samples=40",
+        "--seed",
+        "5",
+    ];
+    let mut a = vec!["study", "run", "monte-carlo"];
+    a.extend(config);
+    a.extend(["--out", run.to_str().unwrap()]);
+    common::ok(&a, "");
+    let mut a = vec!["study", "shard", "monte-carlo"];
+    a.extend(config);
+    assert_eq!(common::ok(&a, "").trim(), "3", "one shard per trial");
+    let files: Vec<String> = (0..3)
+        .rev()
+        .map(|i| {
+            shards
+                .join(format!("s{i}.json"))
+                .to_str()
+                .unwrap()
+                .to_owned()
+        })
+        .collect();
+    for (i, f) in (0..3).rev().zip(&files) {
+        let index = i.to_string();
+        let mut a = vec!["study", "shard", "monte-carlo"];
+        a.extend(config);
+        a.extend(["--index", &index, "--out", f]);
+        common::ok(&a, "");
+    }
+    let mut a = vec!["study", "aggregate", "monte-carlo"];
+    a.extend(config);
+    a.extend(["--out", agg.to_str().unwrap(), "--shard"]);
+    a.extend(files.iter().map(String::as_str));
+    common::ok(&a, "");
+    for f in [
+        "study.json",
+        "levels.csv",
+        "wrong_triplets.csv",
+        "fig2_7_edc_entropy.svg",
+    ] {
+        assert_eq!(
+            std::fs::read(run.join(f)).unwrap(),
+            std::fs::read(agg.join(f)).unwrap(),
+            "{f}"
+        );
+    }
+    // a shard of another config, or one missing, is refused
+    let mut a = vec![
+        "study",
+        "aggregate",
+        "monte-carlo",
+        "--quick",
+        "--set",
+        "trials=4",
+    ];
+    a.extend(["--out", agg.to_str().unwrap(), "--shard"]);
+    a.extend(files.iter().map(String::as_str));
+    let o = common::qrm(&a, "");
+    assert!(String::from_utf8_lossy(&o.stderr).contains("another study or config"));
+    let mut a = vec!["study", "aggregate", "monte-carlo"];
+    a.extend(config);
+    a.extend(["--out", agg.to_str().unwrap(), "--shard", &files[0]]);
+    let o = common::qrm(&a, "");
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("missing [0, 1]"), "{err}");
 }

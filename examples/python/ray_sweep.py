@@ -1,55 +1,67 @@
-"""Fan the PQRM Monte Carlo study out over a Ray cluster with the qrm wheel.
+"""Fan any qrm study out over a Ray cluster with the qrm wheel.
 
-Each Ray task runs one shard (a range of trial indices of every noise level); trial t of level
-l is seeded by (seed, l, t) alone, so the shards can run on any machine in any order and their
-records aggregate into exactly the result of one local run.
+Each Ray task runs one shard of the study (Table 4.1: a world; the Monte Carlo study: a range
+of trials); a shard depends on the config and its index alone, so the shards run on any
+machine in any order and merge into exactly the result of one local run (a missing or
+duplicated shard is refused).
 
-    pip install qrm_robotics-*.whl "ray[default]"
-    python examples/python/ray_sweep.py --shards 64 --trials 1000
+    pip install qrm_robotics-*.whl ray
+    python examples/python/ray_sweep.py --study table-4-1 --full            # Ray on this machine
+    python examples/python/ray_sweep.py --study monte-carlo --address auto  # an existing cluster
+    python examples/python/ray_sweep.py --study monte-carlo --backend local # no Ray: one by one
 
-Without Ray installed (or with --no-ray) the same shards run one after another locally, which
-is what the test suite checks.
+On a real cluster: start it (`ray start --head` on one node, `ray start --address HEAD:6379`
+on the others, with the same venv and wheel on every node), then pass `--address auto` (or the
+head's address) from a node of the cluster; every node needs the qrm wheel installed.
 """
 from __future__ import annotations
 
 import argparse
 import json
-from typing import Any, Dict
+import time
+from typing import Any, Dict, Optional
 
 import qrm
 
 
-def sweep(config: Dict[str, Any], shards: int, use_ray: bool = True) -> Dict[str, Any]:
-    trials = int(config["trials"])
-    size = -(-trials // shards)  # ceil
-    starts = list(range(0, trials, size))
-    if use_ray:
-        import ray  # imported only when used: the wheel does not depend on Ray
+def sweep(
+    study: str,
+    config: Dict[str, Any],
+    backend: str = "ray",
+    address: Optional[str] = None,
+) -> qrm.types.StudyRun:
+    """Runs `study` with `config` shard by shard on `backend` and merges the shards."""
+    if backend == "ray":
+        import ray  # type: ignore[import-untyped,import-not-found,unused-ignore]  # only when used
 
-        ray.init(ignore_reinit_error=True)
-        run = ray.remote(qrm.monte_carlo_shard)
-        futures = [run.remote(config, s, size) for s in starts]
-        records = ray.get(futures)
-    else:
-        records = [qrm.monte_carlo_shard(config, s, size) for s in starts]
-    return qrm.monte_carlo_aggregate(config, records)
+        if not ray.is_initialized():
+            ray.init(address=address)
+    return qrm.distributed.run(study, config, backend=backend)
 
 
 def main() -> None:
-    ap = argparse.ArgumentParser()
-    ap.add_argument("--shards", type=int, default=16)
-    ap.add_argument("--trials", type=int, default=1000)
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--study", default="monte-carlo", help="a name from qrm.studies.available()")
+    ap.add_argument("--full", action="store_true", help="the thesis's config (default: quick)")
+    ap.add_argument("--set", action="append", default=[], metavar="KEY=JSON", help="change a config field")
     ap.add_argument("--seed", type=int, default=0)
-    ap.add_argument("--no-ray", action="store_true")
-    ap.add_argument("--out", default="study.json")
+    ap.add_argument("--backend", default="ray", choices=["ray", "processes", "local"])
+    ap.add_argument("--address", default=None, help="a running Ray cluster (e.g. auto)")
+    ap.add_argument("--out", default="run.json")
     args = ap.parse_args()
-    config = qrm.monte_carlo_config(trials=args.trials, seed=args.seed)
-    result = sweep(config, args.shards, use_ray=not args.no_ray)
+    config = qrm.studies.config(args.study, full=args.full, seed=args.seed)
+    for s in args.set:
+        key, value = s.split("=", 1)
+        config[key] = json.loads(value)
+    t0 = time.perf_counter()
+    run = sweep(args.study, config, args.backend, args.address)
+    took = time.perf_counter() - t0
     with open(args.out, "w") as f:
-        json.dump(result, f)
-    for level in result["levels"]:
-        if level["calculus"] == "edc":
-            print(f"σ_R {level['sigma_r']:6.1f}  entropy {level['mean_entropy']['mean']:.3f}  error {level['error_rate']['mean']:.3f}")
+        json.dump(run, f)
+    n = qrm.distributed.shards(args.study, config)
+    print(f"{args.study}: {n} shards on {args.backend} in {took:.1f} s; wrote {args.out}")
+    for c in run["report"]["claims"]:
+        print(f"[{c['verdict']}] {c['what']}: thesis {c['thesis']}; ours {c['ours']}")
 
 
 if __name__ == "__main__":

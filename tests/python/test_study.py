@@ -18,5 +18,9 @@ def test_the_ray_example_logic_runs_without_ray():
     spec = importlib.util.spec_from_file_location("ray_sweep", path)
     mod = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(mod)
-    result = mod.sweep(qrm.monte_carlo_config(quick=True, trials=3, sigmas=[0.0, 30.0], samples=40), shards=3, use_ray=False)
-    assert len(result["levels"]) == 6 * 4  # six calculi × (0, 30, and the 1 m and 50 m detail levels)
+    cfg = qrm.studies.config("monte-carlo")
+    cfg.update(trials=3, sigmas=[0.0, 30.0], samples=40)
+    run = mod.sweep("monte-carlo", cfg, backend="local")
+    levels = run["output"]["levels"]
+    assert len(levels) == 6 * 4  # six calculi × (0, 30, and the 1 m and 50 m detail levels)
+    assert run == qrm.studies.run("monte-carlo", cfg)

@@ -72,6 +72,7 @@ pub const MAX_STUDY_WORK: f64 = 1e14;
 
 /// Settings of the Monte Carlo study (defaults: DESIGN §4 at full scale).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct MonteCarloConfig {
     /// Sensor noise standard deviations σ_R (m).
     pub sigmas: Vec<f64>,

@@ -36,6 +36,9 @@ fn _qrm(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(study_runner::studies_list, m)?)?;
     m.add_function(wrap_pyfunction!(study_runner::studies_config, m)?)?;
     m.add_function(wrap_pyfunction!(study_runner::studies_run, m)?)?;
+    m.add_function(wrap_pyfunction!(study_runner::studies_shards, m)?)?;
+    m.add_function(wrap_pyfunction!(study_runner::studies_run_shard, m)?)?;
+    m.add_function(wrap_pyfunction!(study_runner::studies_aggregate, m)?)?;
     m.add_function(wrap_pyfunction!(mapping::read_observations, m)?)?;
     m.add_function(wrap_pyfunction!(mapping::single_observation, m)?)?;
     m.add_function(wrap_pyfunction!(mapping::monte_carlo_shard, m)?)?;

@@ -17,6 +17,7 @@
 //! ## Layout
 //! | module | thesis | what |
 //! |---|---|---|
+//! | [`pqrm::monte_carlo`] | §2.3.1, Figs 2.6–2.11 | PQRM map quality vs noise, six calculi (the run is `pqrm::study`) |
 //! | [`qlink::table_4_1`] | §4.4.1, Table 4.1, Figs 4.6–4.7 | navigation failure rate vs sensor range and landmark size |
 //! | [`qlink::field`] | §4.4.2, Table 4.2 | the lidar-only field-site experiment in simulation |
 //! | [`serge::datasets`] | §3.4 | the well-separated, lab and hallway datasets |
@@ -32,9 +33,11 @@
 //! `Pqrm`, `Calculus`, `Sim`).
 
 mod error;
+pub mod pqrm;
 pub mod qlink;
 pub mod report;
 pub mod serge;
+pub mod shard;
 pub mod study;
 pub mod verdict;
 pub mod world_perception;

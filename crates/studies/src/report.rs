@@ -344,6 +344,9 @@ pub struct Line {
     pub name: String,
     /// Points `(x, y)`.
     pub points: Vec<(f64, f64)>,
+    /// ± error bar per point.
+    #[serde(default)]
+    pub err: Option<Vec<f64>>,
     /// A reference (a bound, a baseline): drawn dashed.
     pub reference: bool,
 }
@@ -363,6 +366,21 @@ pub enum Plot {
     Lines {
         /// The series.
         series: Vec<Line>,
+    },
+    /// Points `(x, y, colour value)` in the normalised frame of a ternary calculus, over the
+    /// EDC's curves (thesis Fig 2.8).
+    EdcScatter {
+        /// `(x, y, value)`.
+        points: Vec<(f64, f64, f64)>,
+        /// What the colour shows.
+        colour_label: String,
+    },
+    /// A matrix of counts with labelled rows and columns (a confusion matrix).
+    Heatmap {
+        /// Row and column labels.
+        labels: Vec<String>,
+        /// `matrix[row][column]`.
+        matrix: Vec<Vec<u64>>,
     },
 }
 

@@ -6,6 +6,13 @@
 //! plotting — those are the front ends'. [`AnyStudy`] is the same shape over JSON values, so
 //! `qrm study run NAME` and `qrm.studies.run(name)` need no code per study; [`STUDIES`] lists
 //! them.
+//!
+//! **Shards.** Every study splits its work into [`Study::shards`] independent parts (a world,
+//! a fold, a range of trials) that depend on the config and their index alone:
+//! [`Study::run_shard`] runs one anywhere, [`Study::aggregate`] merges them in any order, and
+//! a local [`Study::run`] *is* the aggregate of every shard run here — so a sweep on a cluster
+//! gives the local result exactly, and a missing or duplicated shard is an error. An output
+//! holds no timings for the same reason: the same config gives the same bytes.
 
 use qsr_core::progress::Progress;
 use serde::Serialize;
@@ -20,10 +27,15 @@ pub trait Study {
     const NAME: &'static str;
     /// One line: what it reproduces.
     const ABOUT: &'static str;
+    /// A file the whole output is worth writing to as JSON (`None`: too large to be useful
+    /// beside the report's tables).
+    const OUTPUT_FILE: Option<&'static str> = None;
     /// What it runs; every field has a meaning a user can change.
     type Config: Serialize + DeserializeOwned + Clone;
     /// What a run produced: records and summaries.
     type Output: Serialize + DeserializeOwned;
+    /// What one shard produced.
+    type Shard: Serialize + DeserializeOwned + Send;
 
     /// A run of a minute or less, for tests and a first look.
     fn quick(seed: u64) -> Self::Config;
@@ -34,11 +46,37 @@ pub trait Study {
     /// # Errors
     /// [`StudyError::InvalidParameter`] naming the field.
     fn check(config: &Self::Config) -> Result<()>;
-    /// Runs the study; `progress` ticks per unit of work and can stop it.
+    /// How many shards the work of `config` splits into.
     ///
     /// # Errors
-    /// The study's errors; [`StudyError::Cancelled`] when `progress` asked it to stop.
-    fn run(config: &Self::Config, progress: &dyn Progress) -> Result<Self::Output>;
+    /// As [`Study::check`].
+    fn shards(config: &Self::Config) -> Result<usize>;
+    /// Runs shard `index`; `progress` ticks per unit of work and can stop it.
+    ///
+    /// # Errors
+    /// The study's errors; [`StudyError::Cancelled`] when `progress` asked it to stop;
+    /// [`StudyError::InvalidParameter`] for an index beyond [`Study::shards`].
+    fn run_shard(
+        config: &Self::Config,
+        index: usize,
+        progress: &dyn Progress,
+    ) -> Result<Self::Shard>;
+    /// Merges shards `(index, shard)` given in any order.
+    ///
+    /// # Errors
+    /// [`StudyError::InvalidParameter`] for a missing, duplicated or foreign shard.
+    fn aggregate(config: &Self::Config, shards: Vec<(usize, Self::Shard)>) -> Result<Self::Output>;
+    /// Runs the study here: every shard, then [`Study::aggregate`].
+    ///
+    /// # Errors
+    /// As [`Study::run_shard`].
+    fn run(config: &Self::Config, progress: &dyn Progress) -> Result<Self::Output> {
+        Self::check(config)?;
+        let shards = (0..Self::shards(config)?)
+            .map(|i| Self::run_shard(config, i, progress).map(|s| (i, s)))
+            .collect::<Result<Vec<_>>>()?;
+        Self::aggregate(config, shards)
+    }
     /// What the run says beside the thesis: tables, claims with computed verdicts, figures.
     fn report(config: &Self::Config, output: &Self::Output) -> Report;
 }
@@ -52,6 +90,27 @@ pub struct Ran {
     pub output: serde_json::Value,
     /// The report.
     pub report: Report,
+    /// [`Study::OUTPUT_FILE`] and the output as JSON in the output's own field order (what
+    /// that file holds).
+    pub output_file: Option<(&'static str, String)>,
+}
+
+impl Ran {
+    fn of<S: Study>(config: &S::Config, output: &S::Output) -> Result<Self> {
+        Ok(Self {
+            config: to_json(config, "config")?,
+            output: to_json(output, "output")?,
+            report: S::report(config, output),
+            output_file: match S::OUTPUT_FILE {
+                Some(name) => Some((
+                    name,
+                    serde_json::to_string(output)
+                        .map_err(|e| StudyError::InvalidParameter(format!("output: {e}")))?,
+                )),
+                None => None,
+            },
+        })
+    }
 }
 
 /// A [`Study`] over JSON values: what the registry holds.
@@ -60,6 +119,8 @@ pub trait AnyStudy: Sync {
     fn name(&self) -> &'static str;
     /// [`Study::ABOUT`].
     fn about(&self) -> &'static str;
+    /// [`Study::OUTPUT_FILE`].
+    fn output_file(&self) -> Option<&'static str>;
     /// The quick or full config with `seed`, as JSON.
     fn config(&self, full: bool, seed: u64) -> serde_json::Value;
     /// Reads and checks a config.
@@ -72,6 +133,30 @@ pub trait AnyStudy: Sync {
     /// # Errors
     /// As [`AnyStudy::check`] and [`Study::run`].
     fn run(&self, config: &serde_json::Value, progress: &dyn Progress) -> Result<Ran>;
+    /// [`Study::shards`] of a config.
+    ///
+    /// # Errors
+    /// As [`AnyStudy::check`].
+    fn shards(&self, config: &serde_json::Value) -> Result<usize>;
+    /// [`Study::run_shard`], the shard as JSON.
+    ///
+    /// # Errors
+    /// As [`AnyStudy::check`] and [`Study::run_shard`].
+    fn run_shard(
+        &self,
+        config: &serde_json::Value,
+        index: usize,
+        progress: &dyn Progress,
+    ) -> Result<serde_json::Value>;
+    /// [`Study::aggregate`] of JSON shards `(index, shard)`, then the report.
+    ///
+    /// # Errors
+    /// As [`AnyStudy::check`] and [`Study::aggregate`]; a shard that is not the study's.
+    fn aggregate(
+        &self,
+        config: &serde_json::Value,
+        shards: Vec<(usize, serde_json::Value)>,
+    ) -> Result<Ran>;
 }
 
 /// The [`AnyStudy`] of `S`.
@@ -109,6 +194,9 @@ impl<S: Study> AnyStudy for Registered<S> {
     fn about(&self) -> &'static str {
         S::ABOUT
     }
+    fn output_file(&self) -> Option<&'static str> {
+        S::OUTPUT_FILE
+    }
     fn config(&self, full: bool, seed: u64) -> serde_json::Value {
         let c = if full { S::full(seed) } else { S::quick(seed) };
         // A config is plain data (numbers, strings, lists, enums): it always serialises.
@@ -120,17 +208,49 @@ impl<S: Study> AnyStudy for Registered<S> {
     fn run(&self, config: &serde_json::Value, progress: &dyn Progress) -> Result<Ran> {
         let c = read::<S>(config)?;
         let output = S::run(&c, progress)?;
-        let report = S::report(&c, &output);
-        Ok(Ran {
-            config: to_json(&c, "config")?,
-            output: to_json(&output, "output")?,
-            report,
-        })
+        Ran::of::<S>(&c, &output)
+    }
+    fn shards(&self, config: &serde_json::Value) -> Result<usize> {
+        S::shards(&read::<S>(config)?)
+    }
+    fn run_shard(
+        &self,
+        config: &serde_json::Value,
+        index: usize,
+        progress: &dyn Progress,
+    ) -> Result<serde_json::Value> {
+        let c = read::<S>(config)?;
+        to_json(&S::run_shard(&c, index, progress)?, "shard")
+    }
+    fn aggregate(
+        &self,
+        config: &serde_json::Value,
+        shards: Vec<(usize, serde_json::Value)>,
+    ) -> Result<Ran> {
+        let c = read::<S>(config)?;
+        let shards = shards
+            .into_iter()
+            .map(|(i, v)| {
+                serde_json::from_value::<S::Shard>(v)
+                    .map(|s| (i, s))
+                    .map_err(|e| {
+                        StudyError::InvalidParameter(format!(
+                            "shard {i} is not a shard of `{}`: {e}",
+                            S::NAME
+                        ))
+                    })
+            })
+            .collect::<Result<Vec<_>>>()?;
+        let output = S::aggregate(&c, shards)?;
+        Ran::of::<S>(&c, &output)
     }
 }
 
 /// Every study, in the thesis's order.
-pub static STUDIES: &[&dyn AnyStudy] = &[&Registered::<crate::qlink::table_4_1::Table41>::new()];
+pub static STUDIES: &[&dyn AnyStudy] = &[
+    &Registered::<crate::pqrm::monte_carlo::MonteCarlo>::new(),
+    &Registered::<crate::qlink::table_4_1::Table41>::new(),
+];
 
 /// The study named `name`.
 ///

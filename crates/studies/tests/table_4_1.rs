@@ -56,3 +56,44 @@ fn the_occlusion_study_can_fail() {
         "{sparse:?} vs {dense:?}"
     );
 }
+
+/// Issue 14 §3: the study runs as shards (one per world) merged in any order into exactly
+/// the local run; a missing or duplicated shard is refused.
+#[test]
+fn shards_in_any_order_give_the_local_run() {
+    use studies::Study;
+    use studies::qlink::table_4_1::{StudyConfig, Table41, Trials};
+    let config = StudyConfig {
+        trial: Trials::All,
+        pairs: Some(12),
+        schedule_pairs: Some(12),
+        samples: 30,
+        range_factors: vec![1.0, 0.7],
+        sizes: vec![0.3, 0.7],
+        ..StudyConfig::quick(4)
+    };
+    let n = Table41::shards(&config).unwrap();
+    assert_eq!(n, 3, "the point-landmark world and one per size");
+    let local = Table41::run(&config, &|| {}).unwrap();
+    let mut shards: Vec<_> = (0..n)
+        .rev()
+        .map(|i| (i, Table41::run_shard(&config, i, &|| {}).unwrap()))
+        .collect();
+    let merged = Table41::aggregate(&config, shards.clone()).unwrap();
+    assert_eq!(
+        serde_json::to_string(&merged).unwrap(),
+        serde_json::to_string(&local).unwrap()
+    );
+    // 2 range settings + 2 sizes under 4 schedules, 12 pairs each
+    assert_eq!(local.records.len(), (2 + 2 * 4) * 12);
+    let dup = shards[0].clone();
+    shards.push(dup);
+    let e = Table41::aggregate(&config, shards.clone())
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("more than once [2]"), "{e}");
+    shards.truncate(2);
+    let e = Table41::aggregate(&config, shards).unwrap_err().to_string();
+    assert!(e.contains("missing [0]"), "{e}");
+    assert!(Table41::run_shard(&config, 3, &|| {}).is_err());
+}

@@ -7,7 +7,8 @@ region maps and learned calculi (`serge`, `SalientRegionMap`, `compose_cells`,
 `serge_cross_validate`); navigation with Q-Link (`navigate`, `qlink_study`,
 `qlink_field`); qualitative reasoning (`reason.close`, `reason.scenario`, `Pqrm.infer`,
 `Pqrm.check`); every thesis study through one runner, as `qrm study` runs them
-(`studies.available`, `studies.config`, `studies.run`).
+(`studies.available`, `studies.config`, `studies.run`), sharded over Ray or processes
+(`distributed.run`).
 
 Every error is a `QrmError`; the subclasses say what kind and are also the builtin a caller
 would catch (`InvalidInput` is a `ValueError`, `IoError` an `OSError`; see the stubs).
@@ -59,6 +60,7 @@ __all__ = [
     "UnsupportedError",
     "__version__",
     "builtin_names",
+    "distributed",
     "compose_cells",
     "monte_carlo",
     "monte_carlo_aggregate",
@@ -311,4 +313,4 @@ def to_pandas(table: Union[Sequence[Mapping[str, Any]], Mapping[str, Sequence[An
 
 
 # Last: `studies` uses `_progress_callback` and `Progress` from above.
-from . import studies  # noqa: E402
+from . import distributed, studies  # noqa: E402

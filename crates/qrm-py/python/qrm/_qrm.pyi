@@ -37,6 +37,9 @@ __all__ = [
     "studies_list",
     "studies_config",
     "studies_run",
+    "studies_shards",
+    "studies_run_shard",
+    "studies_aggregate",
     "worker_threads",
     "reason_close",
     "reason_scenario",
@@ -270,3 +273,6 @@ def studies_config(name: str, full: bool, seed: int) -> str: ...
 def studies_run(
     name: str, config: Optional[str], quick: bool, seed: int, progress: _Callback = None
 ) -> str: ...
+def studies_shards(name: str, config: str) -> int: ...
+def studies_run_shard(name: str, config: str, index: int, progress: _Callback = None) -> str: ...
+def studies_aggregate(name: str, config: str, shards: List[Tuple[int, str]]) -> str: ...

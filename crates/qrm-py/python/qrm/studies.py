@@ -3,7 +3,7 @@ on the command line (the studies themselves are in the Rust `studies` crate).
 
     >>> import qrm
     >>> [name for name, _ in qrm.studies.available()]
-    ['table-4-1']
+    ['monte-carlo', 'table-4-1']
     >>> cfg = qrm.studies.config("table-4-1")          # the quick config, a dict to edit
     >>> cfg["pairs"] = 40
     >>> run = qrm.studies.run("table-4-1", cfg)        # doctest: +SKIP
@@ -51,17 +51,22 @@ def run(
     A config field of the wrong name or type raises `InvalidInput` naming it. `progress` counts
     the study's units of work (navigations, trials, folds)."""
     text = None if config is None else json.dumps(dict(config))
-    result: types.StudyRun = json.loads(
-        _qrm.studies_run(name, text, quick, seed, progress=_progress_callback(progress))
-    )
+    return _as_run(_qrm.studies_run(name, text, quick, seed, progress=_progress_callback(progress)))
+
+
+def _as_run(text: str) -> types.StudyRun:
+    """A run's JSON as a `StudyRun`."""
+    result: types.StudyRun = json.loads(text)
     # JSON has no tuples: the (x, y) points and (legend, values) groups become tuples, as typed
     for figure in result["report"]["figures"]:
         plot: Any = figure["plot"]
         if plot["kind"] == "lines":
             for line in plot["series"]:
                 line["points"] = [tuple(p) for p in line["points"]]
-        else:
+        elif plot["kind"] == "histogram":
             plot["groups"] = [tuple(g) for g in plot["groups"]]
+        elif plot["kind"] == "edc-scatter":
+            plot["points"] = [tuple(p) for p in plot["points"]]
     return result
 
 

@@ -503,6 +503,7 @@ class ReportLine(TypedDict):
 
     name: str
     points: List[Tuple[float, float]]
+    err: Optional[List[float]]
     reference: bool
 
 
@@ -521,6 +522,22 @@ class LinesPlot(TypedDict):
     series: List[ReportLine]
 
 
+class EdcScatterPlot(TypedDict):
+    """Points `(x, y, value)` in a ternary calculus's normalised frame (thesis Fig 2.8)."""
+
+    kind: Literal["edc-scatter"]
+    points: List[Tuple[float, float, float]]
+    colour_label: str
+
+
+class HeatmapPlot(TypedDict):
+    """A labelled matrix of counts (a confusion matrix)."""
+
+    kind: Literal["heatmap"]
+    labels: List[str]
+    matrix: List[List[int]]
+
+
 class ReportFigure(TypedDict):
     """A figure's data (the CLI draws it as SVG and PNG)."""
 
@@ -528,7 +545,7 @@ class ReportFigure(TypedDict):
     title: str
     x_label: str
     y_label: str
-    plot: Union[HistogramPlot, LinesPlot]
+    plot: Union[HistogramPlot, LinesPlot, EdcScatterPlot, HeatmapPlot]
 
 
 class Report(TypedDict):

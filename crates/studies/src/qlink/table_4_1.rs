@@ -656,7 +656,7 @@ pub fn table(records: &[TrialRecord]) -> Vec<TableRow> {
         .collect()
 }
 
-/// What one setting of a study run used and took.
+/// What one setting of a study run used.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct SettingInfo {
     /// Trial.
@@ -671,66 +671,127 @@ pub struct SettingInfo {
     pub elements: usize,
     /// Directed link-graph edges.
     pub edges: usize,
-    /// Seconds to build the map, graph and distance fields (0 when shared).
-    pub build_seconds: f64,
-    /// Seconds of navigation.
-    pub navigate_seconds: f64,
 }
 
-/// A mapped world with the distance fields of every goal.
-type Prepared = (StudyWorld, Vec<(u32, DistanceField)>);
+/// The worlds a config's settings navigate, in the order the settings first use them: `None`
+/// for the point landmarks of the sensor-range trial, `Some(size)` for each landmark size of
+/// the occlusion trial (shared by its schedules). Each is a shard of the study.
+#[must_use]
+pub fn worlds(settings: &[Setting]) -> Vec<Option<f64>> {
+    let mut out: Vec<Option<f64>> = Vec::new();
+    for s in settings {
+        let w = world_of(s);
+        if !out
+            .iter()
+            .any(|o| o.map(f64::to_bits) == w.map(f64::to_bits))
+        {
+            out.push(w);
+        }
+    }
+    out
+}
 
-/// Runs every setting of `config`: one point-landmark map for the sensor-range trial, one
-/// map per landmark size for the occlusion trial (shared by its schedules). `progress` is
-/// told each setting's navigations as the setting starts, ticks after every navigation and
-/// is checked before each setting and each navigation (a cancelled run returns
-/// [`QlinkError::Cancelled`]).
+fn world_of(setting: &Setting) -> Option<f64> {
+    (setting.trial == Trial::Occlusion).then_some(setting.value)
+}
+
+/// The settings one world ran: `(index among the config's settings, records, info)`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct WorldShard {
+    /// Its settings, in the config's order.
+    pub settings: Vec<(usize, Vec<TrialRecord>, SettingInfo)>,
+}
+
+/// Runs the settings of world `index` of [`worlds`]: maps it once, then navigates each of its
+/// settings. A shard depends on the config and its index alone, so shards can run anywhere,
+/// in any order. `progress` is told each setting's navigations as the setting starts, ticks
+/// after every navigation and is checked before each setting and navigation.
 ///
 /// # Errors
-/// As [`build_world`] and [`run_setting`].
+/// As [`build_world`] and [`run_setting`]; [`StudyError::InvalidParameter`] for an index
+/// beyond the worlds.
+pub fn run_world(
+    config: &StudyConfig,
+    index: usize,
+    progress: &dyn Progress,
+) -> Result<WorldShard> {
+    let settings = config.settings()?;
+    let all = worlds(&settings);
+    let Some(&size) = all.get(index) else {
+        return Err(StudyError::InvalidParameter(format!(
+            "world {index} of a study with {} worlds",
+            all.len()
+        )));
+    };
+    progress.check()?;
+    let world = build_world(config.seed, config.samples, size)?;
+    let fields = fields(&world, &pairs(&world.landmarks, None, config.seed))?;
+    let mut out = Vec::new();
+    for (i, setting) in settings.iter().enumerate() {
+        if world_of(setting).map(f64::to_bits) != size.map(f64::to_bits) {
+            continue;
+        }
+        progress.check()?;
+        let pairs = pairs(&world.landmarks, setting.pairs, config.seed);
+        progress.add_total(pairs.len());
+        let records = run_setting(&world, config, &pairs, &fields, setting, progress)?;
+        let info = SettingInfo {
+            frames: world.frames,
+            elements: world.map.elements().len(),
+            edges: world.graph.n_edges(),
+            trial: setting.trial,
+            value: setting.value,
+            schedule: setting.schedule,
+        };
+        out.push((i, records, info));
+    }
+    Ok(WorldShard { settings: out })
+}
+
+/// Merges world shards `(index, shard)`, in any order, into the study's records and setting
+/// infos in the config's order — what [`run_study`] returns.
+///
+/// # Errors
+/// [`StudyError::InvalidParameter`] for a missing, duplicated or foreign shard.
+pub fn aggregate(
+    config: &StudyConfig,
+    shards: Vec<(usize, WorldShard)>,
+) -> Result<(Vec<TrialRecord>, Vec<SettingInfo>)> {
+    let settings = config.settings()?;
+    let n = worlds(&settings).len();
+    crate::shard::check_indices(n, shards.iter().map(|s| s.0))?;
+    let mut parts: Vec<(usize, Vec<TrialRecord>, SettingInfo)> =
+        shards.into_iter().flat_map(|s| s.1.settings).collect();
+    parts.sort_by_key(|p| p.0);
+    if parts.iter().map(|p| p.0).ne(0..settings.len()) {
+        return Err(StudyError::InvalidParameter(
+            "the shards do not hold every setting of this config once".into(),
+        ));
+    }
+    let mut records = Vec::new();
+    let mut infos = Vec::new();
+    for (_, r, i) in parts {
+        records.extend(r);
+        infos.push(i);
+    }
+    Ok((records, infos))
+}
+
+/// Runs every setting of `config`, world by world ([`run_world`], [`aggregate`]): one
+/// point-landmark map for the sensor-range trial, one map per landmark size for the occlusion
+/// trial. A cancelled run returns [`StudyError::Cancelled`].
+///
+/// # Errors
+/// As [`run_world`].
 pub fn run_study(
     config: &StudyConfig,
     progress: &dyn Progress,
 ) -> Result<(Vec<TrialRecord>, Vec<SettingInfo>)> {
-    let settings = config.settings()?;
-    // worlds by landmark size (`None`: the point landmarks of the sensor-range trial)
-    let mut worlds: Vec<(Option<u64>, Prepared)> = Vec::new();
-    let mut records = Vec::new();
-    let mut infos = Vec::new();
-    for setting in &settings {
-        progress.check()?;
-        let t = std::time::Instant::now();
-        let size = (setting.trial == Trial::Occlusion).then_some(setting.value);
-        let key = size.map(f64::to_bits);
-        if !worlds.iter().any(|w| w.0 == key) {
-            let w = build_world(config.seed, config.samples, size)?;
-            let f = fields(&w, &pairs(&w.landmarks, None, config.seed))?;
-            worlds.push((key, (w, f)));
-        }
-        let (world, fields) = worlds
-            .iter()
-            .find(|w| w.0 == key)
-            .map(|w| (&w.1.0, &w.1.1))
-            .ok_or(QlinkError::EmptyMap)?;
-        let pairs = pairs(&world.landmarks, setting.pairs, config.seed);
-        let build_seconds = t.elapsed().as_secs_f64();
-        progress.add_total(pairs.len());
-        let tn = std::time::Instant::now();
-        records.extend(run_setting(
-            world, config, &pairs, fields, setting, progress,
-        )?);
-        infos.push(SettingInfo {
-            frames: world.frames,
-            elements: world.map.elements().len(),
-            edges: world.graph.n_edges(),
-            build_seconds,
-            navigate_seconds: tn.elapsed().as_secs_f64(),
-            trial: setting.trial,
-            value: setting.value,
-            schedule: setting.schedule,
-        });
-    }
-    Ok((records, infos))
+    let n = worlds(&config.settings()?).len();
+    let shards = (0..n)
+        .map(|i| run_world(config, i, progress).map(|s| (i, s)))
+        .collect::<Result<Vec<_>>>()?;
+    aggregate(config, shards)
 }
 
 /// Mean trajectory length of the successful runs of `records` selected by `of`, per |P|,

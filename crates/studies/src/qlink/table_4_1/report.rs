@@ -8,8 +8,8 @@ use qsr_core::progress::Progress;
 use serde::{Deserialize, Serialize};
 
 use super::{
-    ArcRadius, MAP_RANGE, SettingInfo, StudyConfig, TableRow, Trial, TrialRecord, matched_length,
-    run_study, table,
+    ArcRadius, MAP_RANGE, SettingInfo, StudyConfig, TableRow, Trial, TrialRecord, WorldShard,
+    aggregate, matched_length, run_world, table, worlds,
 };
 use crate::error::Result;
 use crate::report::{Cell, Claim, Column, Figure, Line, Plot, Report, Table, Verdict};
@@ -46,12 +46,10 @@ pub struct Table41;
 /// What a run of Table 4.1 produced.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Output {
-    /// Every navigation.
+    /// Every navigation, setting by setting in the config's order.
     pub records: Vec<TrialRecord>,
-    /// What each setting used and took.
+    /// What each setting used.
     pub settings: Vec<SettingInfo>,
-    /// Seconds of the whole run.
-    pub seconds: f64,
 }
 
 impl Study for Table41 {
@@ -60,6 +58,7 @@ impl Study for Table41 {
         "§4.4.1: Q-Link failure rate vs sensor range and landmark size (Table 4.1, Figs 4.6-4.7)";
     type Config = StudyConfig;
     type Output = Output;
+    type Shard = WorldShard;
 
     fn quick(seed: u64) -> StudyConfig {
         StudyConfig::quick(seed)
@@ -70,14 +69,20 @@ impl Study for Table41 {
     fn check(config: &StudyConfig) -> Result<()> {
         config.settings().map(|_| ())
     }
-    fn run(config: &StudyConfig, progress: &dyn Progress) -> Result<Output> {
-        let t0 = std::time::Instant::now();
-        let (records, settings) = run_study(config, progress)?;
-        Ok(Output {
-            records,
-            settings,
-            seconds: t0.elapsed().as_secs_f64(),
-        })
+    /// One shard per world ([`worlds`]): the sensor-range trial's, one per landmark size.
+    fn shards(config: &StudyConfig) -> Result<usize> {
+        Ok(worlds(&config.settings()?).len())
+    }
+    fn run_shard(
+        config: &StudyConfig,
+        index: usize,
+        progress: &dyn Progress,
+    ) -> Result<WorldShard> {
+        run_world(config, index, progress)
+    }
+    fn aggregate(config: &StudyConfig, shards: Vec<(usize, WorldShard)>) -> Result<Output> {
+        let (records, settings) = aggregate(config, shards)?;
+        Ok(Output { records, settings })
     }
     fn report(config: &StudyConfig, output: &Output) -> Report {
         report(config, output)
@@ -91,10 +96,7 @@ pub fn report(config: &StudyConfig, output: &Output) -> Report {
     Report {
         title: "Q-Link simulation study (thesis §4.4.1)".to_owned(),
         setup: setup(config, output),
-        tables: vec![
-            table_4_1(&rows, &output.settings, config),
-            records_table(&output.records),
-        ],
+        tables: vec![table_4_1(&rows, config), records_table(&output.records)],
         claims: claims(&output.records, &rows, config),
         figures: vec![
             plan_length_histogram(&output.records),
@@ -108,8 +110,8 @@ pub fn report(config: &StudyConfig, output: &Output) -> Report {
 #[must_use]
 pub fn describe(i: &SettingInfo) -> String {
     format!(
-        "{} {}: {} frames, {} elements, {} directed edges, built in {:.1} s",
-        i.trial, i.value, i.frames, i.elements, i.edges, i.build_seconds
+        "{} {}: {} frames, {} elements, {} directed edges",
+        i.trial, i.value, i.frames, i.elements, i.edges
     )
 }
 
@@ -139,11 +141,10 @@ fn setup(config: &StudyConfig, output: &Output) -> String {
         Arrival::References => "the next element's reference landmarks are seen at once",
         Arrival::AnyTwo => "any two of the next element's landmarks are seen (idealised)",
     };
-    let t_map: f64 = output.settings.iter().map(|i| i.build_seconds).sum();
     let _ = writeln!(
         s,
-        "Set-up (DESIGN §7): `qlink-200` world (seed {}), mapped with R = {MAP_RANGE} m and N(0, 0.3) noise into a PQRM (`quadrant`, {} samples per landmark per frame, floor 1); β = 1, unit costs; horizon-4 search POMDP (moves to adjacent states, p_detect 0.9); arc controller, arcs and search circles of radius {radius}; references of a frame: {references}; a transition completes when {arrival}; sensing {}; no re-planning (a failed transition fails the pair, as in the thesis). Maps and distance fields built in {t_map:.1} s; total {:.1} s.\n",
-        config.seed, config.samples, config.schedule, output.seconds,
+        "Set-up (DESIGN §7): `qlink-200` world (seed {}), mapped with R = {MAP_RANGE} m and N(0, 0.3) noise into a PQRM (`quadrant`, {} samples per landmark per frame, floor 1); β = 1, unit costs; horizon-4 search POMDP (moves to adjacent states, p_detect 0.9); arc controller, arcs and search circles of radius {radius}; references of a frame: {references}; a transition completes when {arrival}; sensing {}; no re-planning (a failed transition fails the pair, as in the thesis).\n",
+        config.seed, config.samples, config.schedule,
     );
     let _ = writeln!(s, "Maps:\n");
     for i in output
@@ -156,7 +157,7 @@ fn setup(config: &StudyConfig, output: &Output) -> String {
     s
 }
 
-fn table_4_1(rows: &[TableRow], infos: &[SettingInfo], config: &StudyConfig) -> Table {
+fn table_4_1(rows: &[TableRow], config: &StudyConfig) -> Table {
     let mut t = Table::new(
         "table",
         "Table 4.1",
@@ -171,7 +172,6 @@ fn table_4_1(rows: &[TableRow], infos: &[SettingInfo], config: &StudyConfig) -> 
             Column::new("thesis_failure_rate", "thesis"),
             Column::new("mean_length", "mean length of successes (m)"),
             Column::new("over_prop2_bound", "successes over the Prop. 2 bound"),
-            Column::new("seconds", "time (s)").human_only(),
         ],
     )
     .caption(format!(
@@ -179,10 +179,6 @@ fn table_4_1(rows: &[TableRow], infos: &[SettingInfo], config: &StudyConfig) -> 
         config.schedule
     ));
     for r in rows {
-        let seconds = infos
-            .iter()
-            .find(|i| i.trial == r.trial && i.value == r.value && i.schedule == r.schedule)
-            .map_or(0.0, |i| i.navigate_seconds);
         t.push(vec![
             Cell::text(r.trial.as_str()),
             Cell::text(r.value.to_string()),
@@ -199,7 +195,6 @@ fn table_4_1(rows: &[TableRow], infos: &[SettingInfo], config: &StudyConfig) -> 
                 text: format!("{:.1}", r.mean_length),
             },
             Cell::int(r.over_bound as u64),
-            Cell::fixed(seconds, 2),
         ]);
     }
     t
@@ -469,6 +464,7 @@ fn length_vs_plan_length(records: &[TrialRecord], config: &StudyConfig) -> Figur
         series.push(Line {
             name,
             points,
+            err: None,
             reference: false,
         });
     }
@@ -476,6 +472,7 @@ fn length_vs_plan_length(records: &[TrialRecord], config: &StudyConfig) -> Figur
     series.push(Line {
         name: "Prop. 2 bound (2π+1)R|P|".into(),
         points: (1..=top).map(|p| (p as f64, bound * p as f64)).collect(),
+        err: None,
         reference: true,
     });
     Figure {
@@ -551,7 +548,6 @@ mod tests {
         Output {
             records,
             settings: Vec::new(),
-            seconds: 1.0,
         }
     }
 

@@ -1,0 +1,3 @@
+//! The experiments of thesis chapter 2 (PQRM).
+
+pub mod monte_carlo;
