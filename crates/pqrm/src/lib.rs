@@ -41,6 +41,7 @@
 
 pub mod calibrate;
 pub mod calibration;
+pub mod config;
 pub mod error;
 pub mod likelihood;
 pub mod loaders;

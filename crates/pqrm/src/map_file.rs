@@ -31,8 +31,11 @@ use std::path::Path;
 
 use serde::{Deserialize, Serialize, Serializer};
 
+use crate::config::PqrmConfig;
 use crate::error::{PqrmError, Result};
-use crate::map::{FORMAT_VERSION, PqrmConfig};
+
+/// File format version of the JSON map ([`crate::Pqrm::to_json`]).
+pub const FORMAT_VERSION: u32 = 1;
 
 /// Magic bytes that open a binary map.
 pub const BINARY_MAGIC: [u8; 8] = *b"QRM-PQRM";

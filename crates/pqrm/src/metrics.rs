@@ -12,11 +12,7 @@ use crate::likelihood::LandmarkSet;
 use crate::map::Pqrm;
 use crate::observation::LandmarkId;
 
-/// Entropy `−Σ p ln p` in nats (`0 ln 0 = 0`).
-#[must_use]
-pub fn entropy(p: &[f64]) -> f64 {
-    p.iter().filter(|&&v| v > 0.0).map(|&v| -v * v.ln()).sum()
-}
+pub use crate::map::entropy;
 
 /// Surveyed landmark positions: the reference every map is scored against.
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
@@ -109,7 +105,7 @@ pub fn evaluate(map: &Pqrm, truth: &GroundTruth) -> Result<MapMetrics> {
     let mut rank_hits = vec![0usize; q];
     for (set, belief) in map.iter() {
         let p = belief.probabilities();
-        ent += crate::metrics::entropy(&p);
+        ent += entropy(&p);
         let Some(t) = truth.state(calculus, set)? else {
             continue;
         };

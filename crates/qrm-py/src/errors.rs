@@ -180,3 +180,53 @@ fn io_error(msg: String) -> PyErr {
 pub(crate) fn invalid(msg: impl Into<String>) -> PyErr {
     InvalidInput::new_err(msg.into())
 }
+
+/// The Python exception for a Q-Link error.
+pub(crate) fn qlink_err(e: qlink::QlinkError) -> PyErr {
+    let msg = chain(&e);
+    match e {
+        qlink::QlinkError::Calculus(inner) => qsr(inner),
+        qlink::QlinkError::Pqrm(inner) => pqrm(inner),
+        qlink::QlinkError::UnknownLandmark(_)
+        | qlink::QlinkError::SameStartGoal(_)
+        | qlink::QlinkError::EmptyMap
+        | qlink::QlinkError::InvalidParameter(_) => InvalidInput::new_err(msg),
+        qlink::QlinkError::NoPath { .. } => QrmError::new_err(msg),
+        qlink::QlinkError::Unsupported(_) => UnsupportedError::new_err(msg),
+        _ => QrmError::new_err(msg),
+    }
+}
+
+/// The Python exception for a SERGE error.
+pub(crate) fn serge_err(e: serge::SergeError) -> PyErr {
+    let msg = chain(&e);
+    match e {
+        serge::SergeError::Calculus(inner) => qsr(inner),
+        serge::SergeError::Parse { .. } => FormatError::new_err(msg),
+        serge::SergeError::Io { .. } => IoError::new_err(msg),
+        _ => InvalidInput::new_err(msg),
+    }
+}
+
+/// The Python exception for a simulator error.
+pub(crate) fn sim_err(e: sim2d::SimError) -> PyErr {
+    match e {
+        sim2d::SimError::UnknownScenario(_) => SpecError::new_err(e.to_string()),
+        other => invalid(other.to_string()),
+    }
+}
+
+/// The Python exception for a study's error: its cause's, or `InvalidInput` for a refused
+/// configuration.
+pub(crate) fn study_err(e: studies::StudyError) -> PyErr {
+    let msg = chain(&e);
+    match e {
+        studies::StudyError::Qlink(inner) => qlink_err(inner),
+        studies::StudyError::Serge(inner) => serge_err(inner),
+        studies::StudyError::Pqrm(inner) => pqrm(inner),
+        studies::StudyError::Calculus(inner) => qsr(inner),
+        studies::StudyError::Sim(inner) => sim_err(inner),
+        studies::StudyError::InvalidParameter(_) => InvalidInput::new_err(msg),
+        _ => QrmError::new_err(msg),
+    }
+}

@@ -13,39 +13,8 @@ use qlink::{
 use studies::StudyError;
 
 use crate::calculus::Calculus;
-use crate::errors::{InvalidInput, QrmError, invalid, pqrm, qsr};
+use crate::errors::{invalid, qlink_err, study_err};
 use crate::mapping::Pqrm;
-
-/// The Python exception for a Q-Link error.
-pub(crate) fn qlink_err(e: QlinkError) -> PyErr {
-    let msg = crate::errors::chain(&e);
-    match e {
-        QlinkError::Calculus(inner) => qsr(inner),
-        QlinkError::Pqrm(inner) => pqrm(inner),
-        QlinkError::UnknownLandmark(_)
-        | QlinkError::SameStartGoal(_)
-        | QlinkError::EmptyMap
-        | QlinkError::InvalidParameter(_) => InvalidInput::new_err(msg),
-        QlinkError::NoPath { .. } => QrmError::new_err(msg),
-        QlinkError::Unsupported(_) => crate::errors::UnsupportedError::new_err(msg),
-        _ => QrmError::new_err(msg),
-    }
-}
-
-/// The Python exception for a study's error: its cause's, or `InvalidInput` for a refused
-/// configuration.
-pub(crate) fn study_err(e: StudyError) -> PyErr {
-    let msg = crate::errors::chain(&e);
-    match e {
-        StudyError::Qlink(inner) => qlink_err(inner),
-        StudyError::Serge(inner) => crate::regions::serge_err(inner),
-        StudyError::Pqrm(inner) => pqrm(inner),
-        StudyError::Calculus(inner) => qsr(inner),
-        StudyError::Sim(inner) => crate::simulation::sim_err(inner),
-        StudyError::InvalidParameter(_) => InvalidInput::new_err(msg),
-        _ => QrmError::new_err(msg),
-    }
-}
 
 /// Navigates from landmark `start` to landmark `goal` in a world of point landmarks
 /// (`positions`: id → (x, y)) seen within `range`, with a map that is either `pqrm` or —

@@ -3,21 +3,10 @@
 
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyArrayMethods};
 use pyo3::prelude::*;
-use serge::{BeliefSet, CellMasses, Grid, Serge, SergeError, SergeParams};
+use serge::{BeliefSet, CellMasses, Grid, Serge, SergeParams};
 
 use crate::calculus::Calculus;
-use crate::errors::{FormatError, InvalidInput, IoError, invalid, qsr};
-
-/// The Python exception for a SERGE error.
-pub(crate) fn serge_err(e: SergeError) -> PyErr {
-    let msg = crate::errors::chain(&e);
-    match e {
-        SergeError::Calculus(inner) => qsr(inner),
-        SergeError::Parse { .. } => FormatError::new_err(msg),
-        SergeError::Io { .. } => IoError::new_err(msg),
-        _ => InvalidInput::new_err(msg),
-    }
-}
+use crate::errors::{invalid, serge_err};
 
 /// A salient region map (thesis §3.2): regions of grid cells, a region per belief.
 #[pyclass(module = "qrm", frozen)]
@@ -242,7 +231,7 @@ pub(crate) fn serge_cross_validate(
         }
         studies::serge::cross_validation::cross_validate(&data, &config, watch)
     })?
-    .map_err(crate::navigation::study_err)?;
+    .map_err(crate::errors::study_err)?;
     serde_json::to_string(&records).map_err(|e| invalid(e.to_string()))
 }
 

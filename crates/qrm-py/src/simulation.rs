@@ -4,14 +4,7 @@ use numpy::{IntoPyArray, PyArray2};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
-use crate::errors::invalid;
-
-pub(crate) fn sim_err(e: sim2d::SimError) -> PyErr {
-    match e {
-        sim2d::SimError::UnknownScenario(_) => crate::errors::SpecError::new_err(e.to_string()),
-        other => invalid(other.to_string()),
-    }
-}
+use crate::errors::{invalid, sim_err};
 
 /// Runs a scenario (pqrm-100, qlink-200, hallway, field) from a seed. Returns the frames: dicts
 /// {"t", "pose": (x, y, theta), "ids", "xy" (n, 2), "cov" (n, 3) = [cxx, cxy, cyy]} in the robot

@@ -4,7 +4,7 @@
 use pyo3::prelude::*;
 
 use crate::errors::invalid;
-use crate::navigation::study_err;
+use crate::errors::study_err;
 
 /// `[(name, about), ...]` of every study.
 #[pyfunction]

@@ -7,7 +7,8 @@
 
 use crate::error::Result;
 use crate::map::SalientRegionMap;
-use crate::serge::{Serge, SergeParams, TrialState, better, drive, ln_floor};
+use crate::map::ln_floor;
+use crate::serge::{Serge, SergeParams, TrialState, better, drive};
 
 /// log ψ2·ψ3 of the partition in which initial region `r` belongs to `label[r]`, from
 /// cells (−∞ when a region is not contiguous).

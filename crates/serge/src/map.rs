@@ -13,7 +13,6 @@ use serde::{Deserialize, Serialize};
 
 use crate::error::{Result, SergeError};
 use crate::grid::{CellMasses, Grid};
-use crate::serge::{Serge, SergeParams, TrialResult, ln_floor, log_psi1};
 
 /// Marks a cell that is not part of a (resolution-tree node's) map.
 pub const OUTSIDE: u32 = u32::MAX;
@@ -49,69 +48,13 @@ pub struct SalientRegionMap {
     pub best_trial: usize,
 }
 
-impl SalientRegionMap {
-    pub(crate) fn from_trial(serge: &Serge<'_>, best: &TrialResult, params: &SergeParams) -> Self {
-        let init = serge.init();
-        let masses = serge.masses();
-        let kb = init.kb;
-        // representative initial region of each belief → compact region ids in belief order
-        let mut belief_root = vec![0u32; kb];
-        for (r, bs) in init.beliefs.iter().enumerate() {
-            for &j in bs {
-                belief_root[j as usize] = best.root[r];
-            }
-        }
-        let mut id_of_root = vec![OUTSIDE; init.cells.len()];
-        let mut next = 0u32;
-        for &root in &belief_root {
-            if id_of_root[root as usize] == OUTSIDE {
-                id_of_root[root as usize] = next;
-                next += 1;
-            }
-        }
-        let mut cell_region = vec![OUTSIDE; masses.grid().len()];
-        for (r, cells) in init.cells.iter().enumerate() {
-            let id = id_of_root[best.root[r] as usize];
-            for &c in cells {
-                cell_region[c] = id;
-            }
-        }
-        let assignment: Vec<u32> = belief_root
-            .iter()
-            .map(|&r| id_of_root[r as usize])
-            .collect();
-        let beliefs = serge.beliefs().to_vec();
-        let saliency: Vec<f64> = beliefs
-            .iter()
-            .zip(&assignment)
-            .map(|(&k, &region)| {
-                serge
-                    .cells()
-                    .iter()
-                    .filter(|&&c| cell_region[c] == region)
-                    .map(|&c| masses.get(k, c))
-                    .sum::<f64>()
-                    .min(1.0)
-            })
-            .collect();
-        let n_regions = next as usize;
-        Self {
-            grid: *masses.grid(),
-            cell_region,
-            assignment,
-            log_saliency: saliency.iter().map(|&s| ln_floor(s)).sum(),
-            saliency,
-            n_regions,
-            log_psi1: log_psi1(n_regions, params.mu, params.sigma, beliefs.len()),
-            beliefs,
-            mu: params.mu,
-            sigma: params.sigma,
-            trials: params.trials.unwrap_or(0),
-            seed: params.seed,
-            best_trial: best.trial,
-        }
-    }
+/// `ln x`, with x floored at the smallest positive float: a belief with no mass in its region
+/// scores very low but finite.
+pub(crate) fn ln_floor(x: f64) -> f64 {
+    x.max(f64::MIN_POSITIVE).ln()
+}
 
+impl SalientRegionMap {
     /// log φ = log ψ1 + log ψ3 (ψ2 = 1: every region is contiguous).
     #[must_use]
     pub fn log_phi(&self) -> f64 {

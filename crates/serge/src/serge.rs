@@ -44,7 +44,7 @@ pub const MAX_SEARCH_WORK: u64 = 1_000_000_000_000;
 use crate::error::{Result, SergeError};
 use crate::grid::CellMasses;
 use crate::init::{InitialRegions, initial_regions};
-use crate::map::SalientRegionMap;
+use crate::map::{OUTSIDE, SalientRegionMap, ln_floor};
 
 /// The user parameters of SERGE.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -112,10 +112,6 @@ pub(crate) struct TrialState {
     pub merged_into: Vec<u32>,
     pub n_regions: usize,
     pub kb: usize,
-}
-
-pub(crate) fn ln_floor(x: f64) -> f64 {
-    x.max(f64::MIN_POSITIVE).ln()
 }
 
 impl TrialState {
@@ -429,7 +425,7 @@ impl<'a> Serge<'a> {
     }
 
     pub(crate) fn build_map(&self, best: &TrialResult, params: &SergeParams) -> SalientRegionMap {
-        SalientRegionMap::from_trial(self, best, params)
+        map_of_trial(self, best, params)
     }
 }
 
@@ -498,5 +494,69 @@ pub(crate) fn better(a: TrialResult, b: TrialResult) -> TrialResult {
                 b
             }
         }
+    }
+}
+
+/// The map a trial's regions make: compact region ids in belief order, the cells of each
+/// region, the saliencies and the likelihood's parts.
+fn map_of_trial(serge: &Serge<'_>, best: &TrialResult, params: &SergeParams) -> SalientRegionMap {
+    let init = serge.init();
+    let masses = serge.masses();
+    let kb = init.kb;
+    // representative initial region of each belief → compact region ids in belief order
+    let mut belief_root = vec![0u32; kb];
+    for (r, bs) in init.beliefs.iter().enumerate() {
+        for &j in bs {
+            belief_root[j as usize] = best.root[r];
+        }
+    }
+    let mut id_of_root = vec![OUTSIDE; init.cells.len()];
+    let mut next = 0u32;
+    for &root in &belief_root {
+        if id_of_root[root as usize] == OUTSIDE {
+            id_of_root[root as usize] = next;
+            next += 1;
+        }
+    }
+    let mut cell_region = vec![OUTSIDE; masses.grid().len()];
+    for (r, cells) in init.cells.iter().enumerate() {
+        let id = id_of_root[best.root[r] as usize];
+        for &c in cells {
+            cell_region[c] = id;
+        }
+    }
+    let assignment: Vec<u32> = belief_root
+        .iter()
+        .map(|&r| id_of_root[r as usize])
+        .collect();
+    let beliefs = serge.beliefs().to_vec();
+    let saliency: Vec<f64> = beliefs
+        .iter()
+        .zip(&assignment)
+        .map(|(&k, &region)| {
+            serge
+                .cells()
+                .iter()
+                .filter(|&&c| cell_region[c] == region)
+                .map(|&c| masses.get(k, c))
+                .sum::<f64>()
+                .min(1.0)
+        })
+        .collect();
+    let n_regions = next as usize;
+    SalientRegionMap {
+        grid: *masses.grid(),
+        cell_region,
+        assignment,
+        log_saliency: saliency.iter().map(|&s| ln_floor(s)).sum(),
+        saliency,
+        n_regions,
+        log_psi1: log_psi1(n_regions, params.mu, params.sigma, beliefs.len()),
+        beliefs,
+        mu: params.mu,
+        sigma: params.sigma,
+        trials: params.trials.unwrap_or(0),
+        seed: params.seed,
+        best_trial: best.trial,
     }
 }

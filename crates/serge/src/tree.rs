@@ -19,8 +19,9 @@ use serde::{Deserialize, Serialize};
 
 use crate::error::{Result, SergeError};
 use crate::grid::CellMasses;
+use crate::map::ln_floor;
 use crate::map::{OUTSIDE, SalientRegionMap};
-use crate::serge::{Serge, SergeParams, ln_floor};
+use crate::serge::{Serge, SergeParams};
 
 /// One node of the tree: a region at some level.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]

@@ -35,6 +35,7 @@
 mod error;
 pub mod pqrm;
 pub mod qlink;
+pub mod registry;
 pub mod report;
 pub mod serge;
 pub mod shard;
@@ -43,5 +44,6 @@ pub mod verdict;
 pub mod world_perception;
 
 pub use error::{Result, StudyError};
+pub use registry::{STUDIES, find};
 pub use report::{Cell, Claim, Column, Figure, Line, Plot, Report, Table, Verdict};
-pub use study::{AnyStudy, Ran, STUDIES, Study, find};
+pub use study::{AnyStudy, Ran, Study};

@@ -1,11 +1,11 @@
-//! The one shape of every study, and the registry the front ends run them from.
+//! The one shape of every study.
 //!
 //! A study is a serde [`Study::Config`] with [`Study::quick`] and [`Study::full`] versions,
 //! [`Study::run`] from a config to an [`Study::Output`] (records and summaries, serde), and
 //! [`Study::report`] from the two to a [`Report`]. Nothing else: no files, no terminal, no
 //! plotting — those are the front ends'. [`AnyStudy`] is the same shape over JSON values, so
-//! `qrm study run NAME` and `qrm.studies.run(name)` need no code per study; [`STUDIES`] lists
-//! them.
+//! `qrm study run NAME` and `qrm.studies.run(name)` need no code per study;
+//! [`crate::registry::STUDIES`] lists them.
 //!
 //! **Shards.** Every study splits its work into [`Study::shards`] independent parts (a world,
 //! a fold, a range of trials) that depend on the config and their index alone:
@@ -243,74 +243,5 @@ impl<S: Study> AnyStudy for Registered<S> {
             .collect::<Result<Vec<_>>>()?;
         let output = S::aggregate(&c, shards)?;
         Ran::of::<S>(&c, &output)
-    }
-}
-
-/// Every study, in the thesis's order.
-pub static STUDIES: &[&dyn AnyStudy] = &[
-    &Registered::<crate::pqrm::monte_carlo::MonteCarlo>::new(),
-    &Registered::<crate::qlink::table_4_1::Table41>::new(),
-];
-
-/// The study named `name`.
-///
-/// # Errors
-/// [`StudyError::InvalidParameter`] listing the names there are.
-pub fn find(name: &str) -> Result<&'static dyn AnyStudy> {
-    STUDIES
-        .iter()
-        .copied()
-        .find(|s| s.name() == name)
-        .ok_or_else(|| {
-            let names: Vec<&str> = STUDIES.iter().map(|s| s.name()).collect();
-            StudyError::InvalidParameter(format!(
-                "unknown study `{name}` (studies: {})",
-                names.join(", ")
-            ))
-        })
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn every_study_is_found_by_name_and_its_configs_are_valid() {
-        assert!(!STUDIES.is_empty());
-        for s in STUDIES {
-            let found = find(s.name()).map(|f| f.name());
-            assert_eq!(found.ok(), Some(s.name()));
-            for full in [false, true] {
-                let c = s.config(full, 3);
-                assert!(c.is_object(), "{}: {c}", s.name());
-                s.check(&c).unwrap_or_else(|e| panic!("{}: {e}", s.name()));
-            }
-        }
-        let e = find("table-9-9")
-            .err()
-            .map(|e| e.to_string())
-            .unwrap_or_default();
-        assert!(
-            e.contains("unknown study `table-9-9`") && e.contains("table-4-1"),
-            "{e}"
-        );
-    }
-
-    #[test]
-    fn a_misspelt_field_is_refused_with_its_name() {
-        let s = find("table-4-1").ok().map(|s| s.config(false, 0));
-        let mut c = s.unwrap_or_default();
-        if let Some(o) = c.as_object_mut() {
-            o.insert("pairs".into(), serde_json::json!("many"));
-        }
-        let e = find("table-4-1")
-            .and_then(|s| s.check(&c))
-            .err()
-            .map(|e| e.to_string())
-            .unwrap_or_default();
-        assert!(
-            e.contains("config of `table-4-1`") && e.contains("many"),
-            "{e}"
-        );
     }
 }

@@ -165,7 +165,7 @@ fn folds_of(dataset: &Dataset, folds: usize, seed: u64) -> Vec<Vec<usize>> {
 }
 
 /// Runs the cross-validation study; `progress` ticks after every SERGE run and is checked
-/// before each (a cancelled study returns [`SergeError::Cancelled`]).
+/// before each (a cancelled study returns [`StudyError::Cancelled`]).
 ///
 /// # Errors
 /// [`StudyError::InvalidParameter`] for fewer than 2 folds or a belief with fewer points

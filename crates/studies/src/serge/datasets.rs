@@ -78,7 +78,7 @@ impl Dataset {
     /// Gaussian, or samples around the selected triplet observations.
     ///
     /// # Errors
-    /// [`SergeError::Empty`] when a belief has no selected point.
+    /// [`serge::SergeError::Empty`] (as [`StudyError::Serge`]) when a belief has no selected point.
     pub fn beliefs(&self, keep: impl Fn(usize, usize) -> bool, seed: u64) -> Result<BeliefSet> {
         match &self.observations {
             None => Ok(BeliefSet::new(
