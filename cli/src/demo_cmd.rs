@@ -165,7 +165,12 @@ pub fn run(a: DemoArgs) -> Result<()> {
     let pomdps: Vec<SearchPomdp> = map
         .layers()
         .iter()
-        .map(|l| SearchPomdp::new(l.calculus(), true, 0.9, 0.9, 4))
+        .map(|l| {
+            SearchPomdp::builder(l.calculus())
+                .moves(qlink::Moves::Direct)
+                .p_move(0.9)
+                .build()
+        })
         .collect::<std::result::Result<_, _>>()?;
     let cost = qlink::graph::pomdp_cost(&map, &pomdps, qlink::CostModel::NegLogSuccess);
     let graph = LinkGraph::new(&map, BETA, cost)?;

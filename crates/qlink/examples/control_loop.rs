@@ -59,7 +59,9 @@ pub fn run() -> (Vec<u32>, bool) {
         Layer::exact_from_positions(quadrant.clone(), &positions, RANGE).expect("distinct posts");
     let map = QualitativeMap::new(vec![layer]).expect("non-empty map");
     let graph = LinkGraph::new(&map, 1, |_, _, _| 1.0).expect("β = 1");
-    let pomdp = SearchPomdp::new(&quadrant, false, 1.0, 0.9, 4).expect("valid POMDP");
+    let pomdp = SearchPomdp::builder(&quadrant)
+        .build()
+        .expect("valid POMDP");
     let controller = Controller::new(ControllerKind::Arc, RANGE);
     let goal = 9;
     // the robot's own pose estimate (dead reckoning from its commands, as good as its wheels)

@@ -55,4 +55,4 @@ pub use graph::{CostModel, DistanceField, LinkEdge, LinkGraph, Plan};
 pub use map::{Layer, MapElement, QualitativeMap};
 pub use navigate::{Failure, NavConfig, NavOutcome, Navigator, TransitionRecord};
 pub use perception::{Perception, RangePerception};
-pub use pomdp::{Decision, SearchPomdp};
+pub use pomdp::{Decision, Moves, SearchPomdp, SearchPomdpBuilder};

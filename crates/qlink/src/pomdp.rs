@@ -56,19 +56,98 @@ pub struct Decision {
     pub expected_moves: f64,
 }
 
-impl SearchPomdp {
-    /// A POMDP on a calculus's neighbour graph (moves to the current state or a neighbour;
-    /// every state when `direct`), with the thesis's rewards (100 / −1).
+/// Where the robot may head in one decision.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Moves {
+    /// Its current state or a neighbour of it (§4.3.3).
+    #[default]
+    Neighbours,
+    /// Any state (direct transitions, §4.4.2).
+    Direct,
+}
+
+/// Builds a [`SearchPomdp`] with named settings; the defaults are the thesis's §4.4.1 search
+/// (neighbour moves that always succeed, the link seen with probability 0.9 in its state and
+/// never elsewhere, rewards 100 / −1, horizon 4).
+///
+/// ```
+/// use qlink::{Moves, SearchPomdp};
+/// let quadrant = qsr_core::Calculus::builtin("quadrant")?;
+/// let pomdp = SearchPomdp::builder(&quadrant)
+///     .moves(Moves::Direct)
+///     .p_move(0.9)
+///     .horizon(3)
+///     .build()?;
+/// assert_eq!((pomdp.p_detect, pomdp.horizon), (0.9, 3));
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+#[derive(Debug, Clone)]
+#[must_use]
+pub struct SearchPomdpBuilder<'c> {
+    calculus: &'c qsr_core::Calculus,
+    moves: Moves,
+    p_move: f64,
+    p_detect: f64,
+    horizon: usize,
+}
+
+impl SearchPomdpBuilder<'_> {
+    /// Where the robot may head in one decision.
+    pub fn moves(mut self, moves: Moves) -> Self {
+        self.moves = moves;
+        self
+    }
+    /// Probability a move reaches its target state.
+    pub fn p_move(mut self, p: f64) -> Self {
+        self.p_move = p;
+        self
+    }
+    /// Probability of seeing the link when in its state.
+    pub fn p_detect(mut self, p: f64) -> Self {
+        self.p_detect = p;
+        self
+    }
+    /// Planning horizon (decisions).
+    pub fn horizon(mut self, h: usize) -> Self {
+        self.horizon = h;
+        self
+    }
+    /// The POMDP.
     ///
     /// # Errors
     /// [`QlinkError::InvalidParameter`] for probabilities outside [0, 1] or horizon 0.
-    pub fn new(
+    pub fn build(self) -> Result<SearchPomdp> {
+        SearchPomdp::with(
+            self.calculus,
+            self.moves,
+            self.p_move,
+            self.p_detect,
+            self.horizon,
+        )
+    }
+}
+
+impl SearchPomdp {
+    /// A builder on `calculus`'s states, with the thesis's §4.4.1 settings as defaults.
+    pub fn builder(calculus: &qsr_core::Calculus) -> SearchPomdpBuilder<'_> {
+        SearchPomdpBuilder {
+            calculus,
+            moves: Moves::Neighbours,
+            p_move: 1.0,
+            p_detect: 0.9,
+            horizon: 4,
+        }
+    }
+
+    fn with(
         calculus: &qsr_core::Calculus,
-        direct: bool,
+        moves: Moves,
         p_move: f64,
         p_detect: f64,
         horizon: usize,
     ) -> Result<Self> {
+        let direct = moves == Moves::Direct;
         let n = calculus.n_states();
         let g = calculus.neighbours();
         let allowed = (0..n)
@@ -103,10 +182,14 @@ impl SearchPomdp {
     /// whose layers have different numbers of states.
     ///
     /// # Errors
-    /// As [`SearchPomdp::new`].
+    /// As [`SearchPomdpBuilder::build`].
     pub fn for_calculus(&self, calculus: &qsr_core::Calculus) -> Result<Self> {
-        let direct = self.allowed.iter().all(|row| row.iter().all(|&a| a));
-        let mut p = Self::new(calculus, direct, self.p_move, self.p_detect, self.horizon)?;
+        let moves = if self.allowed.iter().all(|row| row.iter().all(|&a| a)) {
+            Moves::Direct
+        } else {
+            Moves::Neighbours
+        };
+        let mut p = Self::with(calculus, moves, self.p_move, self.p_detect, self.horizon)?;
         p.p_false = self.p_false;
         p.found_reward = self.found_reward;
         p.step_cost = self.step_cost;

@@ -157,7 +157,7 @@ fn config(kind: ControllerKind, range: f64) -> NavConfig {
         max_replans: 3,
         ..NavConfig::thesis(
             Controller::new(kind, range),
-            SearchPomdp::new(&quadrant, false, 1.0, 0.9, 4).unwrap(),
+            SearchPomdp::builder(&quadrant).build().unwrap(),
         )
     }
 }
@@ -171,7 +171,11 @@ fn pomdp_values_match_a_hand_computation() {
     belief[left] = 0.3;
     belief[right] = 0.7;
     // perfect moves and detection
-    let p = SearchPomdp::new(&lr, false, 1.0, 1.0, 1).unwrap();
+    let p = SearchPomdp::builder(&lr)
+        .p_detect(1.0)
+        .horizon(1)
+        .build()
+        .unwrap();
     let d = p.decide(left, &belief).unwrap();
     assert_eq!(d.action, right);
     assert!((d.value - (0.7 * 100.0 - 0.3)).abs() < 1e-12);
@@ -181,7 +185,11 @@ fn pomdp_values_match_a_hand_computation() {
     assert!((d2.value - (0.7 * 100.0 + 0.3 * (-1.0 + 100.0))).abs() < 1e-12);
     assert!((d2.p_success - 1.0).abs() < 1e-12);
     // detection 0.8, horizon 2 (eqs. 4.2–4.3 by hand)
-    let p = SearchPomdp::new(&lr, false, 1.0, 0.8, 2).unwrap();
+    let p = SearchPomdp::builder(&lr)
+        .p_detect(0.8)
+        .horizon(2)
+        .build()
+        .unwrap();
     let d = p.decide(left, &belief).unwrap();
     let p0 = 0.7 * 0.8; // look right first and see it
     let miss = 1.0 - p0;
@@ -197,8 +205,21 @@ fn pomdp_values_match_a_hand_computation() {
     // bad input
     assert!(p.decide(0, &[0.5]).is_err());
     assert!(p.decide(5, &belief).is_err());
-    assert!(SearchPomdp::new(&lr, false, 1.5, 0.8, 2).is_err());
-    assert!(SearchPomdp::new(&lr, false, 1.0, 0.8, 0).is_err());
+    assert!(
+        SearchPomdp::builder(&lr)
+            .p_move(1.5)
+            .p_detect(0.8)
+            .horizon(2)
+            .build()
+            .is_err()
+    );
+    assert!(
+        SearchPomdp::builder(&lr)
+            .p_detect(0.8)
+            .horizon(0)
+            .build()
+            .is_err()
+    );
 }
 
 #[test]
@@ -399,7 +420,7 @@ fn pomdp_edge_costs_follow_eqs_4_2_to_4_4() {
     // exact map: the link's state is certain, detection 0.9, horizon 4
     let map = exact_map(&line_world(), 9.0);
     let quadrant = Calculus::builtin("quadrant").unwrap();
-    let pomdps = vec![SearchPomdp::new(&quadrant, false, 1.0, 0.9, 4).unwrap()];
+    let pomdps = vec![SearchPomdp::builder(&quadrant).build().unwrap()];
     let neg_log = qlink::graph::pomdp_cost(&map, &pomdps, qlink::CostModel::NegLogSuccess);
     let p = 1.0 - 0.1f64.powi(4);
     assert!((neg_log(0, 1, &[1, 2]) - (-p.ln())).abs() < 1e-12);
@@ -517,15 +538,44 @@ fn find_goal_searches_for_the_goal_itself() {
 fn pomdp_for_another_calculus_keeps_its_parameters() {
     let lr = Calculus::builtin("left-right").unwrap();
     let q = Calculus::builtin("quadrant").unwrap();
-    let p = SearchPomdp::new(&lr, true, 0.9, 0.7, 3).unwrap();
+    let p = SearchPomdp::builder(&lr)
+        .moves(qlink::Moves::Direct)
+        .p_move(0.9)
+        .p_detect(0.7)
+        .horizon(3)
+        .build()
+        .unwrap();
     let on_q = p.for_calculus(&q).unwrap();
     assert_eq!(on_q.n_states(), 4);
-    assert_eq!(on_q, SearchPomdp::new(&q, true, 0.9, 0.7, 3).unwrap());
+    assert_eq!(
+        on_q,
+        SearchPomdp::builder(&q)
+            .moves(qlink::Moves::Direct)
+            .p_move(0.9)
+            .p_detect(0.7)
+            .horizon(3)
+            .build()
+            .unwrap()
+    );
     // neighbour-only moves stay neighbour-only
     // (front / between / behind: front and behind do not touch)
     let fbb = Calculus::builtin("front-between-behind").unwrap();
-    let nb = SearchPomdp::new(&fbb, false, 0.9, 0.7, 3).unwrap();
-    assert_ne!(nb, SearchPomdp::new(&fbb, true, 0.9, 0.7, 3).unwrap());
+    let nb = SearchPomdp::builder(&fbb)
+        .p_move(0.9)
+        .p_detect(0.7)
+        .horizon(3)
+        .build()
+        .unwrap();
+    assert_ne!(
+        nb,
+        SearchPomdp::builder(&fbb)
+            .moves(qlink::Moves::Direct)
+            .p_move(0.9)
+            .p_detect(0.7)
+            .horizon(3)
+            .build()
+            .unwrap()
+    );
     assert_eq!(nb.for_calculus(&fbb).unwrap(), nb);
     assert!(p.clone().with_p_detect(1.5).is_err());
     assert_eq!(

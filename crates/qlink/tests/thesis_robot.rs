@@ -37,7 +37,7 @@ fn thesis(radius: f64) -> NavConfig {
     let quadrant = Calculus::builtin("quadrant").unwrap();
     NavConfig::thesis(
         Controller::new(ControllerKind::Arc, radius),
-        SearchPomdp::new(&quadrant, false, 1.0, 0.9, 4).unwrap(),
+        SearchPomdp::builder(&quadrant).build().unwrap(),
     )
 }
 

@@ -70,7 +70,7 @@ pub(crate) fn navigate(
             map_range,
             ..NavConfig::thesis(
                 Controller::new(kind, range),
-                SearchPomdp::new(&calc, false, 1.0, 0.9, horizon)?,
+                SearchPomdp::builder(&calc).horizon(horizon).build()?,
             )
         };
         let perception = RangePerception::new(&landmarks, range);

@@ -45,6 +45,38 @@ fn bench(c: &mut Criterion) {
         });
     });
     g.finish();
+    // Where the time goes: the partition alone, on points already in the normalised frame
+    // (what `classify_triplets` does after normalising each row), and the normalisation alone.
+    let (xs, ys): (Vec<f64>, Vec<f64>) = t
+        .iter()
+        .map(|r| {
+            let (dx, dy) = (r[2] - r[0], r[3] - r[1]);
+            let (vx, vy) = (r[4] - r[0], r[5] - r[1]);
+            let l = dx * dx + dy * dy;
+            (-(dx * vy - dy * vx) / l, (dx * vx + dy * vy) / l)
+        })
+        .unzip();
+    let mut states = vec![0u16; N];
+    let mut g = c.benchmark_group("edc_parts_1e7");
+    g.sample_size(10);
+    g.throughput(Throughput::Elements(N as u64));
+    g.bench_function("partition_only_1_thread", |b| {
+        b.iter(|| edc.classify_normalised_into(&xs, &ys, &mut states));
+    });
+    let (mut nx, mut ny) = (vec![0.0f64; N], vec![0.0f64; N]);
+    g.bench_function("normalise_only_1_thread", |b| {
+        b.iter(|| {
+            for ((r, x), y) in t.iter().zip(nx.iter_mut()).zip(ny.iter_mut()) {
+                let (dx, dy) = (r[2] - r[0], r[3] - r[1]);
+                let (vx, vy) = (r[4] - r[0], r[5] - r[1]);
+                let inv = 1.0 / (dx * dx + dy * dy);
+                *x = -(dx * vy - dy * vx) * inv;
+                *y = (dx * vx + dy * vy) * inv;
+            }
+            std::hint::black_box((&nx, &ny));
+        });
+    });
+    g.finish();
 }
 
 criterion_group!(benches, bench);

@@ -931,7 +931,13 @@ pub fn field_graph(
         .map
         .layers()
         .iter()
-        .map(|l| SearchPomdp::new(l.calculus(), true, 0.9, 0.9, params.horizon))
+        .map(|l| {
+            SearchPomdp::builder(l.calculus())
+                .moves(qlink::Moves::Direct)
+                .p_move(0.9)
+                .horizon(params.horizon)
+                .build()
+        })
         .collect::<qlink::Result<_>>()?;
     let graph = if variant.visibility_costs() {
         let map = &field.map;

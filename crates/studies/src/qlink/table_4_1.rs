@@ -470,7 +470,7 @@ pub fn nav_config(range: f64, step: f64) -> Result<NavConfig> {
         map_range: MAP_RANGE,
         ..NavConfig::thesis(
             Controller::new(ControllerKind::Arc, range),
-            SearchPomdp::new(&quadrant, false, 1.0, 0.9, 4)?,
+            SearchPomdp::builder(&quadrant).build()?,
         )
     })
 }
