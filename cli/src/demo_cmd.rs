@@ -415,13 +415,7 @@ fn write_log(
         ),
     )?;
     // the plan in 3D: each element's triangle of landmarks, in the world frame
-    let where_is: BTreeMap<u32, [f64; 2]> = sc
-        .world
-        .spec()
-        .landmarks
-        .iter()
-        .map(|l| (l.id, l.pos))
-        .collect();
+    let where_is: BTreeMap<u32, [f64; 2]> = sc.world.landmark_positions().collect();
     let triangles: Vec<Value> = outcome
         .transitions
         .iter()

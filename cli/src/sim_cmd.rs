@@ -69,13 +69,8 @@ pub fn run(a: SimArgs) -> Result<()> {
     let mut frames = sc.run(a.seed, !a.no_lidar)?;
     pb.finish_and_clear();
     // Landmark id → true position, written as truth.csv for scoring maps.
-    let mut truth: std::collections::BTreeMap<u32, [f64; 2]> = sc
-        .world
-        .spec()
-        .landmarks
-        .iter()
-        .map(|l| (l.id, l.pos))
-        .collect();
+    let mut truth: std::collections::BTreeMap<u32, [f64; 2]> =
+        sc.world.landmark_positions().collect();
     if lidar_detector {
         // Recognised ids are the detector's own; each is scored against the landmark it was
         // first recognised from (clutter has no truth and stays unscored).

@@ -272,6 +272,12 @@ impl World {
         &self.spec
     }
 
+    /// Every landmark as `(id, centre)`, in the spec's order: what a perception, a truth file
+    /// or a plot needs of them.
+    pub fn landmark_positions(&self) -> impl Iterator<Item = (u32, [f64; 2])> + '_ {
+        self.spec.landmarks.iter().map(|l| (l.id, l.pos))
+    }
+
     fn pipeline(&self) -> QueryPipeline<'_> {
         self.broad_phase.as_query_pipeline(
             self.narrow_phase.query_dispatcher(),

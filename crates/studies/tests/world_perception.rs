@@ -13,13 +13,7 @@ fn occlusion_hides_landmarks_that_range_alone_would_show() {
         .with_landmark_radius(0.7)
         .unwrap();
     let occl = WorldPerception::new(&sc.world, 20.0);
-    let landmarks: Vec<(u32, [f64; 2])> = sc
-        .world
-        .spec()
-        .landmarks
-        .iter()
-        .map(|l| (l.id, l.pos))
-        .collect();
+    let landmarks: Vec<(u32, [f64; 2])> = sc.world.landmark_positions().collect();
     let range = RangePerception::new(&landmarks, 20.0);
     let (mut seen_occl, mut seen_range) = (0, 0);
     for i in 0..20 {

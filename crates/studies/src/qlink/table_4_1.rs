@@ -443,13 +443,7 @@ pub fn build_world(seed: u64, samples: usize, size: Option<f64>) -> Result<Study
     }
     let map = QualitativeMap::from_pqrm(pqrm)?;
     let graph = LinkGraph::new(&map, 1, |_, _, _| 1.0)?;
-    let landmarks = scenario
-        .world
-        .spec()
-        .landmarks
-        .iter()
-        .map(|l| (l.id, l.pos))
-        .collect();
+    let landmarks = scenario.world.landmark_positions().collect();
     Ok(StudyWorld {
         frames: frames.len(),
         scenario,
