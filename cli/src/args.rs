@@ -47,6 +47,47 @@ pub enum Command {
     Reason(crate::reason_cmd::ReasonCmd),
 }
 
+/// A recording's format (`--format`, `--from`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum InputFormat {
+    /// `t,robot,landmark,x,y,cxx,cxy,cyy` rows.
+    Csv,
+    /// The UTIAS MRCLAM dataset's folder (range-bearing, surveyed landmarks).
+    Mrclam,
+    /// g2o landmark edges.
+    G2o,
+    /// A ROS 2 bag or a Foxglove/qrm MCAP log.
+    Mcap,
+}
+
+impl InputFormat {
+    /// The name on the command line and in summaries.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Self::Csv => "csv",
+            Self::Mrclam => "mrclam",
+            Self::G2o => "g2o",
+            Self::Mcap => "mcap",
+        }
+    }
+}
+
+/// Where the range-bearing noise comes from (`--noise`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum NoiseMode {
+    /// Fitted from the recording (`qrm pqrm calibrate`).
+    Auto,
+    /// The given sigmas, else MRCLAM's defaults.
+    Fixed,
+}
+
+/// A recording with ground truth (`qrm pqrm real --dataset`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum TruthDataset {
+    /// UTIAS MRCLAM (Dataset 7 in `../shared/data`).
+    Mrclam,
+}
+
 /// `qrm pqrm ...`.
 #[derive(Debug, Subcommand)]
 pub enum PqrmCmd {
@@ -113,8 +154,8 @@ pub struct StudyArgs {
 #[derive(Debug, clap::Args)]
 pub struct RealArgs {
     /// Dataset kind (only `mrclam` has ground truth here).
-    #[arg(long, default_value = "mrclam")]
-    pub dataset: String,
+    #[arg(long, value_enum, default_value_t = TruthDataset::Mrclam)]
+    pub dataset: TruthDataset,
     /// Dataset directory (default: ../shared/data/mrclam-dataset7).
     #[arg(long)]
     pub input: Option<PathBuf>,
@@ -160,16 +201,16 @@ pub struct NoiseArgs {
     pub sigma_bearing: Option<f64>,
     /// `auto` fits the noise from the recording itself (as `qrm pqrm calibrate`), `fixed` uses
     /// --sigma-range/--sigma-bearing. Default: auto for mrclam unless a sigma is given.
-    #[arg(long = "noise")]
-    pub mode: Option<String>,
+    #[arg(long = "noise", value_enum)]
+    pub mode: Option<NoiseMode>,
 }
 
 /// `qrm pqrm calibrate`.
 #[derive(Debug, clap::Args)]
 pub struct CalibrateArgs {
-    /// Input format: csv, mrclam, g2o or mcap.
-    #[arg(long)]
-    pub format: String,
+    /// Input format.
+    #[arg(long, value_enum)]
+    pub format: InputFormat,
     /// Input file or directory.
     #[arg(long)]
     pub input: PathBuf,
@@ -195,9 +236,9 @@ pub struct MergeArgs {
 /// `qrm map`.
 #[derive(Debug, clap::Args)]
 pub struct MapArgs {
-    /// Input format: csv, mrclam, g2o or mcap (a ROS 2 bag or Foxglove/qrm MCAP log).
-    #[arg(long)]
-    pub format: String,
+    /// Input format (mcap: a ROS 2 bag or Foxglove/qrm MCAP log).
+    #[arg(long, value_enum)]
+    pub format: InputFormat,
     /// Input file (csv, g2o, mcap) or directory (mrclam).
     #[arg(long)]
     pub input: PathBuf,

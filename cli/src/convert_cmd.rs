@@ -6,12 +6,14 @@ use std::path::PathBuf;
 use anyhow::{Context, Result, bail};
 use pqrm::loaders::read_truth_csv;
 
+use crate::args::InputFormat;
+
 /// `qrm convert`.
 #[derive(Debug, clap::Args)]
 pub struct ConvertArgs {
-    /// Input format: csv, mrclam or g2o.
-    #[arg(long)]
-    pub from: String,
+    /// Input format (not mcap: that is the output).
+    #[arg(long, value_enum)]
+    pub from: InputFormat,
     /// Input file (csv, g2o) or directory (mrclam).
     #[arg(long)]
     pub input: PathBuf,
@@ -29,11 +31,11 @@ pub struct ConvertArgs {
 
 /// Runs `qrm convert`.
 pub fn run(a: ConvertArgs) -> Result<()> {
-    if a.from == "mcap" {
+    if a.from == InputFormat::Mcap {
         bail!("--from mcap: the input is MCAP already");
     }
-    let (noise, _) = crate::pqrm_cmd::resolve_noise(&a.from, &a.input, &a.noise)?;
-    let mut data = crate::pqrm_cmd::load_dataset(&a.from, &a.input, noise)?;
+    let (noise, _) = crate::pqrm_cmd::resolve_noise(a.from, &a.input, &a.noise)?;
+    let mut data = crate::pqrm_cmd::load_dataset(a.from, &a.input, noise)?;
     if let Some(t) = &a.truth {
         data.truth = Some(read_truth_csv(t)?);
     }

@@ -16,7 +16,8 @@ use studies::Study;
 use studies::pqrm::monte_carlo::MonteCarlo;
 
 use crate::args::{
-    CalibrateArgs, MapArgs, MapFormatArg, MergeArgs, OrderingsArg, PqrmCmd, RealArgs, StudyArgs,
+    CalibrateArgs, InputFormat, MapArgs, MapFormatArg, MergeArgs, NoiseMode, OrderingsArg, PqrmCmd,
+    RealArgs, StudyArgs, TruthDataset,
 };
 use crate::output::{CsvTable, Staging, write_atomic};
 use crate::plot::{self, Series};
@@ -67,7 +68,7 @@ fn prob(calculus: &str, samples: usize, seed: u64, floor: f64) -> Result<()> {
 }
 
 pub(crate) fn load_dataset(
-    format: &str,
+    format: InputFormat,
     input: &Path,
     noise: RangeBearingNoise,
 ) -> Result<Dataset> {
@@ -79,11 +80,10 @@ pub(crate) fn load_dataset(
         "noise standard deviations must be finite and >= 0"
     );
     Ok(match format {
-        "csv" => read_csv(input)?,
-        "mrclam" => read_mrclam(input, noise)?,
-        "g2o" => read_g2o(input)?,
-        "mcap" => qrm_log::read_mcap(input, &qrm_log::ReadOptions::default())?.dataset,
-        other => bail!("unknown --format `{other}` (csv, mrclam, g2o, mcap)"),
+        InputFormat::Csv => read_csv(input)?,
+        InputFormat::Mrclam => read_mrclam(input, noise)?,
+        InputFormat::G2o => read_g2o(input)?,
+        InputFormat::Mcap => qrm_log::read_mcap(input, &qrm_log::ReadOptions::default())?.dataset,
     })
 }
 
@@ -91,28 +91,27 @@ pub(crate) fn load_dataset(
 /// MRCLAM's defaults) or `auto` (fitted from the recording, `pqrm::calibrate`). Without a mode,
 /// a given sigma means fixed — explicit values win — and otherwise MRCLAM is fitted.
 pub(crate) fn resolve_noise(
-    format: &str,
+    format: InputFormat,
     input: &Path,
     args: &crate::args::NoiseArgs,
 ) -> Result<(RangeBearingNoise, Option<pqrm::calibrate::NoiseFit>)> {
-    let (mode, sigma_range, sigma_bearing) =
-        (args.mode.as_deref(), args.sigma_range, args.sigma_bearing);
+    let (mode, sigma_range, sigma_bearing) = (args.mode, args.sigma_range, args.sigma_bearing);
     let fixed = RangeBearingNoise {
         sigma_range: sigma_range.unwrap_or(RangeBearingNoise::MRCLAM.sigma_range),
         sigma_bearing: sigma_bearing.unwrap_or(RangeBearingNoise::MRCLAM.sigma_bearing),
     };
     let given = sigma_range.is_some() || sigma_bearing.is_some();
     let chosen = mode.is_some();
-    let mode = mode.unwrap_or(if given || format != "mrclam" {
-        "fixed"
+    let mode = mode.unwrap_or(if given || format != InputFormat::Mrclam {
+        NoiseMode::Fixed
     } else {
-        "auto"
+        NoiseMode::Auto
     });
     match mode {
-        "fixed" => Ok((fixed, None)),
-        "auto" => {
+        NoiseMode::Fixed => Ok((fixed, None)),
+        NoiseMode::Auto => {
             ensure!(
-                format == "mrclam",
+                format == InputFormat::Mrclam,
                 "--noise auto fits a range-bearing sensor: --format mrclam (the other formats carry their own covariances; `qrm pqrm calibrate` reports a fit for any)"
             );
             ensure!(
@@ -144,7 +143,6 @@ pub(crate) fn resolve_noise(
                 Some(fit),
             ))
         }
-        other => bail!("unknown --noise `{other}` (fixed, auto)"),
     }
 }
 
@@ -163,14 +161,14 @@ pub fn map(a: MapArgs) -> Result<()> {
     };
     config.validate()?;
     let temper = TemperChoice::parse(&a.temper).context("--temper")?;
-    let (noise, noise_fit) = if a.format == "mcap" {
+    let (noise, noise_fit) = if a.format == InputFormat::Mcap {
         (RangeBearingNoise::MRCLAM, None)
     } else {
-        resolve_noise(&a.format, &a.input, &a.noise)?
+        resolve_noise(a.format, &a.input, &a.noise)?
     };
     // The loaders' errors name the file and line (or topic, message and field) themselves.
     let mut log_read = None;
-    let mut data = if a.format == "mcap" {
+    let mut data = if a.format == InputFormat::Mcap {
         let mut options = qrm_log::ReadOptions {
             topics: a.topic.clone(),
             range_max: a.range_max,
@@ -193,7 +191,7 @@ pub fn map(a: MapArgs) -> Result<()> {
             a.topic.is_empty() && a.range_max.is_none() && !a.allow_truncated,
             "--topic, --range-max and --allow-truncated are for --format mcap"
         );
-        load_dataset(&a.format, &a.input, noise)?
+        load_dataset(a.format, &a.input, noise)?
     };
     if let Some(t) = &a.truth {
         data.truth = Some(read_truth_csv(t)?);
@@ -418,7 +416,7 @@ fn score_into(obj: &mut serde_json::Map<String, serde_json::Value>, m: &pqrm::Ma
 
 /// `qrm pqrm calibrate`.
 fn calibrate(a: CalibrateArgs) -> Result<()> {
-    let data = load_dataset(&a.format, &a.input, RangeBearingNoise::MRCLAM)?;
+    let data = load_dataset(a.format, &a.input, RangeBearingNoise::MRCLAM)?;
     let fit = pqrm::calibrate::fit_noise(&data)
         .with_context(|| format!("fitting the noise of {}", a.input.display()))?;
     let z: Vec<f64> = pqrm::calibrate::residuals(&data, &fit)
@@ -430,17 +428,17 @@ fn calibrate(a: CalibrateArgs) -> Result<()> {
     let out_dir = stage.path().to_path_buf();
     let summary = json!({
         "input": a.input.display().to_string(),
-        "format": a.format,
+        "format": a.format.as_str(),
         "fit": fit,
         "method": "spread of the distance between landmarks seen in one frame about its median over frames; IRLS on |z| <= 3; outlier rate = share beyond 3 sigma minus 0.27 %",
         // Only a range-bearing format takes the fitted σs; the others carry their own
         // covariances, which this fit is a check of.
-        "use": if a.format == "mrclam" {
+        "use": if a.format == InputFormat::Mrclam {
             format!("qrm map --format mrclam --input {} --noise auto  (or --sigma-range {:.4} --sigma-bearing {:.5}; heavy tails: --sensor outliers:{:.3},{:.0})",
                 a.input.display(), fit.sigma_range, fit.sigma_bearing, fit.outlier_rate, fit.max_range.ceil())
         } else {
             format!("{} files carry their own covariances: compare them with this fit; for heavy tails: qrm map --sensor outliers:{:.3},{:.0}",
-                a.format, fit.outlier_rate, fit.max_range.ceil())
+                a.format.as_str(), fit.outlier_rate, fit.max_range.ceil())
         },
     });
     write_atomic(
@@ -533,17 +531,16 @@ fn study(a: StudyArgs) -> Result<()> {
 }
 
 fn real(a: RealArgs) -> Result<()> {
-    ensure!(
-        a.dataset == "mrclam",
-        "only --dataset mrclam has ground truth here"
-    );
+    // `--dataset` has one value today (clap refuses others): MRCLAM, whose landmarks are
+    // surveyed
+    let TruthDataset::Mrclam = a.dataset;
     let input = a
         .input
         .clone()
         .unwrap_or_else(|| PathBuf::from("../shared/data/mrclam-dataset7"));
-    let (noise, noise_fit) = resolve_noise("mrclam", &input, &a.noise)
+    let (noise, noise_fit) = resolve_noise(InputFormat::Mrclam, &input, &a.noise)
         .context("loading the recording (choose it with --input DIR)")?;
-    let mut data = load_dataset("mrclam", &input, noise)?;
+    let mut data = load_dataset(InputFormat::Mrclam, &input, noise)?;
     let gated = if a.gate {
         let fit = match &noise_fit {
             Some(f) => *f,

@@ -20,12 +20,23 @@ pub enum QlinkCmd {
     Field(crate::field_cmd::FieldArgs),
 }
 
+/// `--trial` of `qrm qlink study` (the study's `Trials`, named for the command line).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum TrialsArg {
+    /// Both, as Table 4.1.
+    All,
+    /// R' below R, point landmarks.
+    SensorRange,
+    /// Landmarks as discs that hide each other.
+    Occlusion,
+}
+
 /// `qrm qlink study`.
 #[derive(Debug, clap::Args)]
 pub struct StudyArgs {
-    /// sensor-range, occlusion or all.
-    #[arg(long, default_value = "all")]
-    pub trial: Trials,
+    /// The trials to run.
+    #[arg(long, value_enum, default_value_t = TrialsArg::All)]
+    pub trial: TrialsArg,
     /// 400 random pairs per setting and a lighter map: under a minute.
     #[arg(long)]
     pub quick: bool,
@@ -67,7 +78,11 @@ fn study(a: StudyArgs) -> Result<()> {
     } else {
         StudyConfig::full(a.seed)
     };
-    config.trial = a.trial;
+    config.trial = match a.trial {
+        TrialsArg::All => Trials::All,
+        TrialsArg::SensorRange => Trials::SensorRange,
+        TrialsArg::Occlusion => Trials::Occlusion,
+    };
     if a.pairs.is_some() {
         config.pairs = a.pairs;
         config.schedule_pairs = a.pairs.map(|p| p.min(config.schedule_pairs.unwrap_or(p)));

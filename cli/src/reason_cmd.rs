@@ -94,9 +94,9 @@ pub struct ReasonStudyArgs {
     /// A small study (two calculi, two hidings, two worlds).
     #[arg(long)]
     pub quick: bool,
-    /// Recording format: mrclam (surveyed truth included) or csv (with --truth).
-    #[arg(long, default_value = "mrclam")]
-    pub format: String,
+    /// Recording format: mrclam brings its surveyed truth, the others need --truth.
+    #[arg(long, value_enum, default_value_t = crate::args::InputFormat::Mrclam)]
+    pub format: crate::args::InputFormat,
     /// The recording (default: ../shared/data/mrclam-dataset7).
     #[arg(long)]
     pub input: Option<PathBuf>,

@@ -23,7 +23,7 @@ pub fn study(a: &ReasonStudyArgs) -> Result<()> {
         .input
         .clone()
         .unwrap_or_else(|| PathBuf::from("../shared/data/mrclam-dataset7"));
-    let mut data = crate::pqrm_cmd::load_dataset(&a.format, &input, RangeBearingNoise::MRCLAM)
+    let mut data = crate::pqrm_cmd::load_dataset(a.format, &input, RangeBearingNoise::MRCLAM)
         .context("loading the recording (choose it with --input)")?;
     if let Some(t) = &a.truth {
         data.truth = Some(pqrm::loaders::read_truth_csv(t)?);

@@ -61,8 +61,9 @@ pub struct RunArgs {
 /// `qrm serge study`.
 #[derive(Debug, clap::Args)]
 pub struct StudyArgs {
-    /// well-separated, hallway, lab or all.
-    #[arg(long, default_value = "all")]
+    /// A dataset, or all of them.
+    #[arg(long, default_value = "all",
+          value_parser = clap::builder::PossibleValuesParser::new(DATASETS.iter().copied().chain(["all"])))]
     pub dataset: String,
     /// Small study (60×60 grid, 5 μ, 3 σ, T = 5·K, 2,000 samples): under a minute.
     #[arg(long)]

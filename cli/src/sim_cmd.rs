@@ -12,8 +12,8 @@ use qrm_log::{McapLog, stamp, yaw};
 /// Raw flags of `qrm sim`.
 #[derive(Debug, clap::Args)]
 pub struct SimArgs {
-    /// Scenario: pqrm-100, qlink-200, hallway or field.
-    #[arg(long)]
+    /// Scenario.
+    #[arg(long, value_parser = clap::builder::PossibleValuesParser::new(sim2d::SCENARIOS))]
     pub scenario: String,
     /// A TOML world file replacing the scenario's generated world.
     #[arg(long)]
@@ -24,16 +24,24 @@ pub struct SimArgs {
     /// Set every point landmark's radius (m), e.g. the occlusion study's 0.1–0.7 m sizes.
     #[arg(long)]
     pub landmark_radius: Option<f64>,
-    /// Landmark detector: `ideal` (ids known, full occlusion) or `lidar` (extracted from the
-    /// scan, recognised across frames by triangles, no ids; thesis §4.4.2).
-    #[arg(long, default_value = "ideal")]
-    pub detector: String,
+    /// Landmark detector.
+    #[arg(long, value_enum, default_value_t = Detector::Ideal)]
+    pub detector: Detector,
     /// Skip the lidar (detections only; much smaller logs).
     #[arg(long)]
     pub no_lidar: bool,
     /// Output directory.
     #[arg(long)]
     pub out: PathBuf,
+}
+
+/// How `qrm sim` detects landmarks.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum Detector {
+    /// Ids known, full occlusion.
+    Ideal,
+    /// Extracted from the scan and recognised across frames by triangles, no ids (§4.4.2).
+    Lidar,
 }
 
 /// Runs `qrm sim`.
@@ -59,11 +67,12 @@ pub fn run(a: SimArgs) -> Result<()> {
     if let Some(r) = a.landmark_radius {
         sc = sc.with_landmark_radius(r)?;
     }
-    let lidar_detector = match a.detector.as_str() {
-        "ideal" => false,
-        "lidar" if a.no_lidar => bail!("--detector lidar needs the lidar (drop --no-lidar)"),
-        "lidar" => true,
-        other => bail!("unknown --detector `{other}` (ideal, lidar)"),
+    let lidar_detector = match a.detector {
+        Detector::Ideal => false,
+        Detector::Lidar if a.no_lidar => {
+            bail!("--detector lidar needs the lidar (drop --no-lidar)")
+        }
+        Detector::Lidar => true,
     };
     let pb = crate::progress::bar(1, &format!("simulating {}", a.scenario));
     let mut frames = sc.run(a.seed, !a.no_lidar)?;

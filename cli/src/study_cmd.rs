@@ -19,6 +19,7 @@ pub enum StudyCmd {
     /// Print a study's config as TOML, to edit and pass back with `--config`.
     Config {
         /// The study (`qrm study list`).
+        #[arg(value_parser = study_names())]
         name: String,
         /// The thesis's settings (default: the quick ones).
         #[arg(long)]
@@ -81,6 +82,7 @@ pub struct RunArgs {
 #[derive(Debug, clap::Args)]
 pub struct ConfigArgs {
     /// The study (`qrm study list`).
+    #[arg(value_parser = study_names())]
     pub name: String,
     /// The quick config (a minute or less) instead of the thesis's.
     #[arg(long)]
@@ -96,6 +98,11 @@ pub struct ConfigArgs {
     /// Seed of the built-in config (a --config file's own seed wins).
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
+}
+
+/// The registry's names, as the values clap accepts and lists.
+fn study_names() -> clap::builder::PossibleValuesParser {
+    clap::builder::PossibleValuesParser::new(studies::STUDIES.iter().map(|s| s.name()))
 }
 
 /// Runs a `qrm study` subcommand.

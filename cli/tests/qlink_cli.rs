@@ -103,7 +103,11 @@ fn quick_study_writes_table_4_1() {
         "",
     );
     assert!(!r.status.success());
-    assert!(String::from_utf8_lossy(&r.stderr).contains("unknown trial"));
+    let err = String::from_utf8_lossy(&r.stderr);
+    assert!(
+        err.contains("invalid value 'nope'") && err.contains("all, sensor-range, occlusion"),
+        "{err}"
+    );
 }
 
 #[test]

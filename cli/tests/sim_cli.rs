@@ -164,5 +164,9 @@ fn seeds_make_runs_byte_identical_and_bad_input_fails() {
         .args(["sim", "--scenario", "moon", "--out", "x"])
         .output()
         .unwrap();
-    assert!(String::from_utf8_lossy(&o.stderr).contains("unknown scenario"));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("invalid value 'moon'") && err.contains("pqrm-100, qlink-200, hallway, field"),
+        "{err}"
+    );
 }

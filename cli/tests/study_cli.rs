@@ -120,7 +120,11 @@ fn list_config_and_refusals() {
         assert!(!out.exists(), "nothing written for a refused config");
     }
     let o = common::qrm(&["study", "run", "table-9-9", "--out", "x"], "");
-    assert!(String::from_utf8_lossy(&o.stderr).contains("studies: monte-carlo, table-4-1"));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("invalid value 'table-9-9'") && err.contains("monte-carlo, table-4-1"),
+        "{err}"
+    );
 }
 
 #[test]
