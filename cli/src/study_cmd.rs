@@ -6,10 +6,10 @@
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result, bail};
-use studies::{AnyStudy, Plot, Ran, Report};
+use studies::{AnyStudy, Figure, Plot, Ran, Report};
 
 use crate::output::{CsvTable, Staging, write_atomic};
-use crate::plot::{Series, histogram, line_chart};
+use crate::plot::{RegionPicture, Series, histogram, line_chart, region_map};
 
 /// `qrm study ...`.
 #[derive(Debug, clap::Subcommand)]
@@ -289,51 +289,32 @@ pub fn run_and_write(study: &dyn AnyStudy, config: &serde_json::Value, out: &Pat
     Ok(())
 }
 
-/// The files of a run: each table as CSV, each figure (SVG and PNG), report.md (with the run
-/// time when it was measured here), config.toml.
+/// The files of a run: each table as CSV, each figure (SVG and PNG), each attachment,
+/// report.md (with the run time when it was measured here), config.toml. A name with a `/`
+/// (`hallway/cv`) goes into that subdirectory.
 pub fn write_run(dir: &Path, ran: &Ran, seconds: Option<f64>) -> Result<()> {
     let report = &ran.report;
+    let place = |name: &str| -> Result<PathBuf> {
+        let path = dir.join(name);
+        if let Some(parent) = path.parent() {
+            std::fs::create_dir_all(parent)
+                .with_context(|| format!("creating {}", parent.display()))?;
+        }
+        Ok(path)
+    };
     for t in &report.tables {
         let (header, rows) = t.csv_records();
         let mut csv = CsvTable::new(header)?;
         for r in rows {
             csv.row(r)?;
         }
-        csv.write(&dir.join(format!("{}.csv", t.name)))?;
+        csv.write(&place(&format!("{}.csv", t.name))?)?;
     }
     for f in &report.figures {
-        let stem = dir.join(&f.name);
-        match &f.plot {
-            Plot::Histogram { edges, groups } => {
-                histogram(&stem, &f.title, &f.x_label, edges, groups)?;
-            }
-            Plot::Lines { series } => {
-                let series: Vec<Series> = series
-                    .iter()
-                    .map(|l| {
-                        let s = if l.reference {
-                            Series::reference(l.name.clone(), l.points.clone())
-                        } else {
-                            Series::line(l.name.clone(), l.points.clone())
-                        };
-                        match &l.err {
-                            Some(e) => s.with_err(e.clone()),
-                            None => s,
-                        }
-                    })
-                    .collect();
-                line_chart(&stem, &f.title, &f.x_label, &f.y_label, &series)?;
-            }
-            Plot::EdcScatter {
-                points,
-                colour_label,
-            } => {
-                crate::plot::edc_scatter(&stem, &f.title, points, colour_label)?;
-            }
-            Plot::Heatmap { labels, matrix } => {
-                crate::plot::heatmap(&stem, &f.title, labels, matrix)?;
-            }
-        }
+        draw(&place(&f.name)?, f)?;
+    }
+    for a in &report.attachments {
+        write_atomic(&place(&a.name)?, a.text.as_bytes())?;
     }
     if let Some((name, text)) = &ran.output_file {
         write_atomic(&dir.join(name), text.as_bytes())?;
@@ -347,6 +328,70 @@ pub fn write_run(dir: &Path, ran: &Ran, seconds: Option<f64>) -> Result<()> {
     }
     write_atomic(&dir.join("report.md"), md.as_bytes())?;
     write_atomic(&dir.join("config.toml"), to_toml(&ran.config)?.as_bytes())?;
+    Ok(())
+}
+
+/// Draws a figure at `stem` (SVG and PNG).
+fn draw(stem: &Path, f: &Figure) -> Result<()> {
+    match &f.plot {
+        Plot::Histogram { edges, groups } => {
+            histogram(stem, &f.title, &f.x_label, edges, groups)?;
+        }
+        Plot::Lines { series } => {
+            let series: Vec<Series> = series
+                .iter()
+                .map(|l| {
+                    let s = if l.reference {
+                        Series::reference(l.name.clone(), l.points.clone())
+                    } else {
+                        Series::line(l.name.clone(), l.points.clone())
+                    };
+                    match &l.err {
+                        Some(e) => s.with_err(e.clone()),
+                        None => s,
+                    }
+                })
+                .collect();
+            line_chart(stem, &f.title, &f.x_label, &f.y_label, &series)?;
+        }
+        Plot::EdcScatter {
+            points,
+            colour_label,
+        } => {
+            crate::plot::edc_scatter(stem, &f.title, points, colour_label)?;
+        }
+        Plot::Heatmap { labels, matrix } => {
+            crate::plot::heatmap(stem, &f.title, labels, matrix)?;
+        }
+        Plot::Regions {
+            window,
+            nx,
+            ny,
+            cell_region,
+            points,
+            shade,
+            marks,
+            numbers,
+        } => {
+            let picture = RegionPicture {
+                window: *window,
+                nx: *nx,
+                ny: *ny,
+                cell_region,
+                points,
+                highlight: &[],
+                shade: shade.as_deref(),
+                marks,
+                numbers: *numbers,
+            };
+            region_map(stem, &f.title, &picture)?;
+        }
+        Plot::Site { world, drive, runs } => {
+            let runs: Vec<(Vec<(f64, f64)>, bool)> =
+                runs.iter().map(|r| (r.points.clone(), r.reached)).collect();
+            crate::plot::runs_map(stem, &f.title, world, drive, &runs)?;
+        }
+    }
     Ok(())
 }
 

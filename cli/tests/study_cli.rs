@@ -90,7 +90,11 @@ fn the_alias_and_the_runner_write_the_same_files() {
 fn list_config_and_refusals() {
     let list = common::ok(&["study", "list"], "");
     let names: Vec<&str> = list.lines().filter_map(|l| l.split(' ').next()).collect();
-    assert_eq!(names, ["monte-carlo", "table-4-1"], "{list}");
+    assert_eq!(
+        names,
+        ["monte-carlo", "serge-cv", "table-4-1", "field"],
+        "{list}"
+    );
     let full = common::ok(
         &["study", "config", "table-4-1", "--full", "--seed", "7"],
         "",
@@ -122,7 +126,8 @@ fn list_config_and_refusals() {
     let o = common::qrm(&["study", "run", "table-9-9", "--out", "x"], "");
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(
-        err.contains("invalid value 'table-9-9'") && err.contains("monte-carlo, table-4-1"),
+        err.contains("invalid value 'table-9-9'")
+            && err.contains("monte-carlo, serge-cv, table-4-1, field"),
         "{err}"
     );
 }

@@ -24,7 +24,21 @@ def t41_config() -> dict:
     return cfg
 
 
-CASES = [("monte-carlo", mc_config), ("table-4-1", t41_config)]
+def field_config() -> dict:
+    cfg = qrm.studies.config("field", seed=2)
+    cfg.update(trials=2, worlds=2)  # a shard per world
+    return cfg
+
+
+def serge_config() -> dict:
+    cfg = qrm.studies.config("serge-cv", seed=1)
+    cfg.update(datasets=["well-separated", "hallway"], folds=2, grid=30, mus=[1, 5],
+               sigmas=[2.0], trials_per_belief=2, samples=300)
+    return cfg
+
+
+CASES = [("monte-carlo", mc_config), ("table-4-1", t41_config), ("field", field_config),
+         ("serge-cv", serge_config)]
 QUICK = [("monte-carlo", 3), ("table-4-1", 1)]  # the quick configs, with their seeds
 
 

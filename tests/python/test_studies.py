@@ -94,3 +94,29 @@ def test_a_table_becomes_a_data_frame(small_run):
     assert list(df["pairs"]) == [30, 30]
     with pytest.raises(KeyError, match="tables"):
         qrm.studies.table_frame(small_run["report"], "nope")
+
+
+@pytest.mark.parametrize(
+    "name,changes,table",
+    [
+        ("field", dict(trials=2, worlds=1), "variants"),
+        ("serge-cv", dict(datasets=["hallway"], folds=2, grid=30, mus=[1, 5], sigmas=[2.0],
+                          trials_per_belief=2, samples=300), "hallway/cv"),
+    ],
+)
+def test_the_field_and_serge_studies_run_from_python_typed(name, changes, table):
+    # issue 14 §2: every study through qrm.studies.run, its figures' data typed
+    cfg = qrm.studies.config(name, seed=4)
+    cfg.update(changes)
+    run = qrm.studies.run(name, cfg)
+    conforms(run, qt.StudyRun)
+    report = run["report"]
+    assert any(t["name"] == table for t in report["tables"])
+    assert report["claims"] and all(
+        c["verdict"] in ("agree", "disagree", "holds", "violated") for c in report["claims"]
+    )
+    kinds = {f["plot"]["kind"] for f in report["figures"]}
+    assert kinds & {"site", "regions"}, kinds
+    with pytest.raises(qrm.InvalidInput, match="worlds|datasets"):
+        bad = dict(cfg, worlds=0) if name == "field" else dict(cfg, datasets=[])
+        qrm.studies.run(name, bad)

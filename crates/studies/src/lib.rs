@@ -21,7 +21,9 @@
 //! | [`qlink::table_4_1`] | §4.4.1, Table 4.1, Figs 4.6–4.7 | navigation failure rate vs sensor range and landmark size |
 //! | [`qlink::field`] | §4.4.2, Table 4.2 | the lidar-only field-site experiment in simulation |
 //! | [`serge::datasets`] | §3.4 | the well-separated, lab and hallway datasets |
-//! | [`serge::cross_validation`] | §3.4, Figs 3.9–3.12 | SERGE cross-validation over μ and σ |
+//! | [`serge::cross_validation`] | §3.4.2, Fig 3.7 | SERGE cross-validation over μ and σ, fold by fold |
+//! | [`serge::examples`], [`serge::resolution_tree`], [`serge::learned_calculus`] | Figs 3.8–3.10, §3.3.2 | maps on all data, the lab's resolution-tree plan, the hallway's learned calculus and Algorithm 3 checked |
+//! | [`serge::study`] | §3.4 | all of it as one study (`serge-cv`), a shard per fold and dataset |
 //!
 //! ## Naming rule
 //! A study's module is named after what the thesis calls it (`table_4_1`, `field`,
@@ -45,5 +47,7 @@ pub mod world_perception;
 
 pub use error::{Result, StudyError};
 pub use registry::{STUDIES, find};
-pub use report::{Cell, Claim, Column, Figure, Line, Plot, Report, Table, Verdict};
+pub use report::{
+    Attachment, Cell, Claim, Column, Figure, Line, Plot, Report, SiteRun, Table, Verdict,
+};
 pub use study::{AnyStudy, Ran, Study};

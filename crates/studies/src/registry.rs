@@ -7,7 +7,9 @@ use crate::study::{AnyStudy, Registered};
 /// Every study, in the thesis's order.
 pub static STUDIES: &[&dyn AnyStudy] = &[
     &Registered::<crate::pqrm::monte_carlo::MonteCarlo>::new(),
+    &Registered::<crate::serge::SergeStudy>::new(),
     &Registered::<crate::qlink::table_4_1::Table41>::new(),
+    &Registered::<crate::qlink::field::FieldExperiment>::new(),
 ];
 
 /// The study named `name`.

@@ -351,6 +351,15 @@ pub struct Line {
     pub reference: bool,
 }
 
+/// A run drawn on a site: its path, and whether it reached its goal.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct SiteRun {
+    /// Positions along the run (m).
+    pub points: Vec<(f64, f64)>,
+    /// Reached its goal (drawn solid; dashed when not).
+    pub reached: bool,
+}
+
 /// What a figure shows.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case", tag = "kind")]
@@ -382,6 +391,36 @@ pub enum Plot {
         /// `matrix[row][column]`.
         matrix: Vec<Vec<u64>>,
     },
+    /// A partition of a window into regions, cell by cell (a salient region map, a raster
+    /// calculus; thesis Figs 3.8–3.10), with data points and marks over it.
+    Regions {
+        /// `[x0, x1, y0, y1]`.
+        window: [f64; 4],
+        /// Cells along x.
+        nx: usize,
+        /// Cells along y.
+        ny: usize,
+        /// Region of every cell, row by row (`u32::MAX`: not drawn).
+        cell_region: Vec<u32>,
+        /// Data points (black).
+        points: Vec<[f64; 2]>,
+        /// Cells shaded dark (a plan's path, where a composed point can be).
+        shade: Option<Vec<bool>>,
+        /// Labelled marks (red).
+        marks: Vec<([f64; 2], String)>,
+        /// Each region's number written at its centroid.
+        numbers: bool,
+    },
+    /// A simulated site from above: its objects, the mapping drive and runs over them
+    /// (thesis Fig 4.9).
+    Site {
+        /// The site.
+        world: sim2d::WorldSpec,
+        /// The mapping drive (m).
+        drive: Vec<(f64, f64)>,
+        /// The runs.
+        runs: Vec<SiteRun>,
+    },
 }
 
 /// A figure's data: a front end draws it.
@@ -397,6 +436,16 @@ pub struct Figure {
     pub y_label: String,
     /// The data.
     pub plot: Plot,
+}
+
+/// A file a study produces beside its tables and figures (a learned calculus, a map), written
+/// as it is.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Attachment {
+    /// Path under the output directory (`hallway/calculus.json`).
+    pub name: String,
+    /// Its text.
+    pub text: String,
 }
 
 /// Everything a study says about one run.
@@ -415,6 +464,9 @@ pub struct Report {
     /// Closing markdown: where we differ from the thesis and why (mechanisms only — every
     /// number and verdict is in the tables and claims).
     pub notes: String,
+    /// Files beside the tables and figures.
+    #[serde(default)]
+    pub attachments: Vec<Attachment>,
 }
 
 impl Report {

@@ -2,3 +2,14 @@
 
 pub mod cross_validation;
 pub mod datasets;
+pub mod examples;
+pub mod learned_calculus;
+mod report;
+pub mod resolution_tree;
+pub mod study;
+
+pub use report::{
+    HALLWAY_TOLERANCE, THESIS_HALLWAY_MAPS, THESIS_LAB_ERROR, THESIS_LAB_MAPS, THESIS_WORST_ERROR,
+    report,
+};
+pub use study::SergeStudy;

@@ -47,6 +47,39 @@ impl Trend {
     }
 }
 
+/// The Wilson score interval of a proportion `successes / n` at `z` standard errors (1.96:
+/// 95 %): where the true rate lies, given the count. `[0, 1]` for `n = 0` (nothing known).
+#[must_use]
+pub fn wilson_interval(successes: usize, n: usize, z: f64) -> [f64; 2] {
+    if n == 0 {
+        return [0.0, 1.0];
+    }
+    let nf = n as f64;
+    let p = successes.min(n) as f64 / nf;
+    let z2 = z * z;
+    let denominator = 1.0 + z2 / nf;
+    let centre = (p + z2 / (2.0 * nf)) / denominator;
+    let half = z * (p * (1.0 - p) / nf + z2 / (4.0 * nf * nf)).sqrt() / denominator;
+    [(centre - half).max(0.0), (centre + half).min(1.0)]
+}
+
+/// The two-proportion z statistic of `k1 / n1` against `k0 / n0` (pooled standard error):
+/// positive when the first is the higher rate; |z| > 1.96 is a difference at the 5 % level.
+/// 0 when either count is empty or the pooled rate is 0 or 1 (no spread to judge by).
+#[must_use]
+pub fn two_proportion_z(k1: usize, n1: usize, k0: usize, n0: usize) -> f64 {
+    if n1 == 0 || n0 == 0 {
+        return 0.0;
+    }
+    let (n1f, n0f) = (n1 as f64, n0 as f64);
+    let pooled = (k1 + k0) as f64 / (n1f + n0f);
+    let se = (pooled * (1.0 - pooled) * (1.0 / n1f + 1.0 / n0f)).sqrt();
+    if se == 0.0 {
+        return 0.0;
+    }
+    (k1 as f64 / n1f - k0 as f64 / n0f) / se
+}
+
 /// "agree" when our trend is the thesis's, else "disagree".
 #[must_use]
 pub fn agreement(ours: Trend, theirs: Trend) -> &'static str {
@@ -65,6 +98,34 @@ mod tests {
         assert_eq!(Trend::of(&[0.3, 0.2, 0.2], 1e-9), Trend::Falls);
         assert_eq!(Trend::of(&[0.1, 0.3, 0.2], 1e-9), Trend::Mixed);
         assert_eq!(Trend::of(&[0.1, 0.1005, 0.1], 0.001), Trend::Flat);
+    }
+
+    #[test]
+    fn wilson_intervals_of_known_counts() {
+        // 13 of 18 (the thesis's field trials): 0.491..0.875 at 95 %
+        let [lo, hi] = wilson_interval(13, 18, 1.96);
+        assert!(
+            (lo - 0.4912).abs() < 5e-4 && (hi - 0.8750).abs() < 5e-4,
+            "{lo} {hi}"
+        );
+        // all or nothing still has a width; no trials says nothing
+        let [lo, hi] = wilson_interval(0, 10, 1.96);
+        assert!(lo == 0.0 && (hi - 0.2775).abs() < 5e-4, "{hi}");
+        let [lo, hi] = wilson_interval(10, 10, 1.96);
+        assert!((lo - 0.7225).abs() < 5e-4 && hi == 1.0, "{lo}");
+        assert_eq!(wilson_interval(0, 0, 1.96), [0.0, 1.0]);
+    }
+
+    #[test]
+    fn two_proportions_differ_only_beyond_their_noise() {
+        // 90 of 100 against 70 of 100: z = 0.2 / sqrt(0.8 * 0.2 * 0.02) = 3.536
+        let z = two_proportion_z(90, 100, 70, 100);
+        assert!((z - 3.5355).abs() < 1e-3, "{z}");
+        assert!((two_proportion_z(70, 100, 90, 100) + z).abs() < 1e-12);
+        // 9 of 12 against 8 of 12 is noise
+        assert!(two_proportion_z(9, 12, 8, 12).abs() < 1.96);
+        assert_eq!(two_proportion_z(5, 5, 7, 7), 0.0);
+        assert_eq!(two_proportion_z(1, 0, 7, 7), 0.0);
     }
 
     #[test]

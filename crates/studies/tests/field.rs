@@ -198,9 +198,74 @@ fn bad_field_parameters_are_errors() {
             range_sigma: -1.0,
             ..FieldParams::quick(0)
         },
+        FieldParams {
+            worlds: 0,
+            ..FieldParams::quick(0)
+        },
+        // issue 17: a day's worth of trials is refused before any work
+        FieldParams {
+            worlds: 1_000_000,
+            ..FieldParams::quick(0)
+        },
+        FieldParams {
+            worlds: 2,
+            ..FieldParams::quick(u64::MAX)
+        },
     ] {
         assert!(map_field(&p).is_err());
     }
+}
+
+/// The experiment as a study: one shard per world, merged in any order into exactly the local
+/// run; a missing world or a world of another seed is refused.
+#[test]
+fn field_worlds_merge_in_any_order_into_the_run() {
+    use studies::Study;
+    use studies::qlink::field::FieldExperiment;
+    let config = FieldParams {
+        trials: 3,
+        worlds: 2,
+        ..FieldParams::quick(5)
+    };
+    assert_eq!(FieldExperiment::shards(&config).unwrap(), 2);
+    let local = FieldExperiment::run(&config, &|| {}).unwrap();
+    assert_eq!(local.worlds.len(), 2);
+    assert_eq!(
+        local.worlds[1].seed, 6,
+        "world seeds follow the config's seed"
+    );
+    assert_eq!(local.worlds[1].trials.len(), 4 * 3);
+    let shards: Vec<_> = (0..2)
+        .rev()
+        .map(|i| (i, FieldExperiment::run_shard(&config, i, &|| {}).unwrap()))
+        .collect();
+    let merged = FieldExperiment::aggregate(&config, shards.clone()).unwrap();
+    assert_eq!(
+        serde_json::to_string(&merged).unwrap(),
+        serde_json::to_string(&local).unwrap()
+    );
+    let pooled: usize = local.variants.iter().map(|v| v.trials).sum();
+    assert_eq!(
+        pooled,
+        2 * 4 * 3,
+        "the pooled counts hold every world's trials"
+    );
+    let e = FieldExperiment::aggregate(&config, shards[..1].to_vec()).unwrap_err();
+    assert!(e.to_string().contains("missing [0]"), "{e}");
+    let other = FieldParams {
+        seed: 9,
+        ..config.clone()
+    };
+    let e = FieldExperiment::aggregate(&other, shards).unwrap_err();
+    assert!(e.to_string().contains("not this config's world"), "{e}");
+    assert!(FieldExperiment::run_shard(&config, 2, &|| {}).is_err());
+    let report = FieldExperiment::report(&config, &local);
+    assert_eq!(
+        report.table("trials").map(|t| t.rows.len()),
+        Some(2 * 4 * 3)
+    );
+    assert!(report.claim("success rate").is_some());
+    assert_eq!(report.figures.len(), 2);
 }
 
 /// Files name a variant one way: the CSV/report name is the JSON name.

@@ -3,7 +3,7 @@ on the command line (the studies themselves are in the Rust `studies` crate).
 
     >>> import qrm
     >>> [name for name, _ in qrm.studies.available()]
-    ['monte-carlo', 'table-4-1']
+    ['monte-carlo', 'serge-cv', 'table-4-1', 'field']
     >>> cfg = qrm.studies.config("table-4-1")          # the quick config, a dict to edit
     >>> cfg["pairs"] = 40
     >>> run = qrm.studies.run("table-4-1", cfg)        # doctest: +SKIP
@@ -67,6 +67,12 @@ def _as_run(text: str) -> types.StudyRun:
             plot["groups"] = [tuple(g) for g in plot["groups"]]
         elif plot["kind"] == "edc-scatter":
             plot["points"] = [tuple(p) for p in plot["points"]]
+        elif plot["kind"] == "regions":
+            plot["marks"] = [(list(at), label) for at, label in plot["marks"]]
+        elif plot["kind"] == "site":
+            plot["drive"] = [tuple(p) for p in plot["drive"]]
+            for r in plot["runs"]:
+                r["points"] = [tuple(p) for p in r["points"]]
     return result
 
 

@@ -538,6 +538,38 @@ class HeatmapPlot(TypedDict):
     matrix: List[List[int]]
 
 
+class RegionsPlot(TypedDict):
+    """A window partitioned into regions cell by cell, row by row (a salient region map, a
+    raster calculus; thesis Figs 3.8-3.10), with data points, shaded cells and marks."""
+
+    kind: Literal["regions"]
+    window: List[float]
+    nx: int
+    ny: int
+    cell_region: List[int]
+    points: List[List[float]]
+    shade: Optional[List[bool]]
+    marks: List[Tuple[List[float], str]]
+    numbers: bool
+
+
+class SiteRun(TypedDict):
+    """A run drawn on a site: its path and whether it reached its goal."""
+
+    points: List[Tuple[float, float]]
+    reached: bool
+
+
+class SitePlot(TypedDict):
+    """A simulated site from above (a sim2d world spec: bounds, landmark, wall, clutter), the
+    mapping drive and runs over it (thesis Fig 4.9)."""
+
+    kind: Literal["site"]
+    world: Dict[str, Any]
+    drive: List[Tuple[float, float]]
+    runs: List[SiteRun]
+
+
 class ReportFigure(TypedDict):
     """A figure's data (the CLI draws it as SVG and PNG)."""
 
@@ -545,7 +577,15 @@ class ReportFigure(TypedDict):
     title: str
     x_label: str
     y_label: str
-    plot: Union[HistogramPlot, LinesPlot, EdcScatterPlot, HeatmapPlot]
+    plot: Union[HistogramPlot, LinesPlot, EdcScatterPlot, HeatmapPlot, RegionsPlot, SitePlot]
+
+
+class ReportAttachment(TypedDict):
+    """A file a study produces beside its tables and figures (`name` is its path under the
+    output directory)."""
+
+    name: str
+    text: str
 
 
 class Report(TypedDict):
@@ -557,6 +597,7 @@ class Report(TypedDict):
     claims: List[ReportClaim]
     figures: List[ReportFigure]
     notes: str
+    attachments: List[ReportAttachment]
 
 
 class StudyRun(TypedDict):

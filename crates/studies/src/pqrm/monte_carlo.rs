@@ -112,6 +112,7 @@ pub fn report(_config: &MonteCarloConfig, r: &MonteCarloResult) -> Report {
             "Notes. The thesis does not say how many landmarks a world has (we use {}), nor whether its estimator had a floor (ours adds {} pseudo-count per state so one outlier cannot rule a state out; it also keeps entropies a little above what a floor-free filter would reach).",
             r.config.landmarks, r.config.floor
         ),
+        attachments: Vec::new(),
     }
 }
 

@@ -14,12 +14,16 @@ use serde::{Deserialize, Serialize};
 
 use serge::{CellMasses, Grid, Serge, SergeParams};
 
-use super::datasets::Dataset;
+use super::datasets::{Dataset, DatasetName};
 use crate::error::{Result, StudyError};
 
 /// What the study runs.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct StudyConfig {
+    /// The datasets, in the report's order (default: all three).
+    #[serde(default = "all_datasets")]
+    pub datasets: Vec<DatasetName>,
     /// Grid cells per side.
     pub grid: usize,
     /// Folds.
@@ -40,12 +44,17 @@ pub struct StudyConfig {
     pub seed: u64,
 }
 
+fn all_datasets() -> Vec<DatasetName> {
+    DatasetName::ALL.to_vec()
+}
+
 impl StudyConfig {
     /// The thesis's study: 200 × 200 cells, 5 folds, μ = 1…K, σ = 2, 4, …, 16, T = 100·K,
     /// 10,000 samples per triplet belief.
     #[must_use]
     pub fn full(seed: u64) -> Self {
         Self {
+            datasets: all_datasets(),
             grid: 200,
             folds: 5,
             mus: None,
@@ -164,17 +173,12 @@ fn folds_of(dataset: &Dataset, folds: usize, seed: u64) -> Vec<Vec<usize>> {
         .collect()
 }
 
-/// Runs the cross-validation study; `progress` ticks after every SERGE run and is checked
-/// before each (a cancelled study returns [`StudyError::Cancelled`]).
+/// Checks that `dataset` can be cross-validated with `config`.
 ///
 /// # Errors
 /// [`StudyError::InvalidParameter`] for fewer than 2 folds or a belief with fewer points
-/// than folds; SERGE's errors.
-pub fn cross_validate(
-    dataset: &Dataset,
-    config: &StudyConfig,
-    progress: &dyn Progress,
-) -> Result<Vec<CvRecord>> {
+/// than folds.
+pub fn check(dataset: &Dataset, config: &StudyConfig) -> Result<()> {
     if config.folds < 2 {
         return Err(StudyError::InvalidParameter("at least 2 folds".into()));
     }
@@ -185,61 +189,99 @@ pub fn cross_validate(
             config.folds
         )));
     }
+    Ok(())
+}
+
+/// Runs the cross-validation study; `progress` ticks after every SERGE run and is checked
+/// before each (a cancelled study returns [`StudyError::Cancelled`]).
+///
+/// # Errors
+/// As [`check`] and [`cross_validate_fold`].
+pub fn cross_validate(
+    dataset: &Dataset,
+    config: &StudyConfig,
+    progress: &dyn Progress,
+) -> Result<Vec<CvRecord>> {
+    check(dataset, config)?;
+    let mut records = Vec::new();
+    for fold in 0..config.folds {
+        records.extend(cross_validate_fold(dataset, config, fold, progress)?);
+    }
+    Ok(records)
+}
+
+/// The SERGE runs of one fold: every setting trained on the other folds and scored on this
+/// one. Depends on the dataset, the config and `fold` alone (a shard of the study).
+///
+/// # Errors
+/// As [`check`]; [`StudyError::InvalidParameter`] for a fold beyond the config's; SERGE's
+/// errors; [`StudyError::Cancelled`].
+pub fn cross_validate_fold(
+    dataset: &Dataset,
+    config: &StudyConfig,
+    fold: usize,
+    progress: &dyn Progress,
+) -> Result<Vec<CvRecord>> {
+    check(dataset, config)?;
+    if fold >= config.folds {
+        return Err(StudyError::InvalidParameter(format!(
+            "fold {fold} of {} folds",
+            config.folds
+        )));
+    }
     let k = dataset.len();
     let fold_of = folds_of(dataset, config.folds, config.seed);
     let mut records = Vec::new();
-    for fold in 0..config.folds {
-        let fseed = config.seed ^ (fold as u64 + 1).wrapping_mul(0x9e37);
-        let train = dataset.beliefs(|k, i| fold_of[k][i] != fold, fseed)?;
-        let test = dataset.beliefs(|k, i| fold_of[k][i] == fold, fseed ^ 0x7e57)?;
-        let test_points: Vec<Vec<[f64; 2]>> = dataset
-            .points
-            .iter()
-            .enumerate()
-            .map(|(k, pts)| {
-                pts.iter()
-                    .enumerate()
-                    .filter(|&(i, _)| fold_of[k][i] == fold)
-                    .map(|(_, p)| *p)
-                    .collect()
-            })
-            .collect();
-        let grid = Grid::around(&train, config.grid, config.grid)?;
-        let train_m = CellMasses::compute(&train, grid)?;
-        let test_m = CellMasses::compute(&test, grid)?;
-        let serge = Serge::new(&train_m)?;
-        let settings: Vec<(&str, usize, f64)> = config
-            .mus_for(k)
-            .into_iter()
-            .map(|mu| ("mu", mu, config.sigma_for_mu))
-            .chain(
-                config
-                    .sigmas
-                    .iter()
-                    .map(|&s| ("sigma", config.mu_for_sigma.min(k), s)),
-            )
-            .collect();
-        progress.add_total(settings.len());
-        for (sweep, mu, sigma) in settings {
-            progress.check()?;
-            let params = SergeParams::new(mu, sigma)
-                .trials(config.trials_per_belief * k)
-                .seed(fseed);
-            let map = serge.run(&params)?;
-            let (errors, points) = map.errors(&test_points)?;
-            records.push(CvRecord {
-                sweep: sweep.into(),
-                mu,
-                sigma,
-                fold,
-                n_regions: map.n_regions,
-                train_log_saliency: map.log_saliency,
-                test_log_likelihood: map.log_likelihood(&test_m)?,
-                errors,
-                points,
-            });
-            progress.tick();
-        }
+    let fseed = config.seed ^ (fold as u64 + 1).wrapping_mul(0x9e37);
+    let train = dataset.beliefs(|k, i| fold_of[k][i] != fold, fseed)?;
+    let test = dataset.beliefs(|k, i| fold_of[k][i] == fold, fseed ^ 0x7e57)?;
+    let test_points: Vec<Vec<[f64; 2]>> = dataset
+        .points
+        .iter()
+        .enumerate()
+        .map(|(k, pts)| {
+            pts.iter()
+                .enumerate()
+                .filter(|&(i, _)| fold_of[k][i] == fold)
+                .map(|(_, p)| *p)
+                .collect()
+        })
+        .collect();
+    let grid = Grid::around(&train, config.grid, config.grid)?;
+    let train_m = CellMasses::compute(&train, grid)?;
+    let test_m = CellMasses::compute(&test, grid)?;
+    let serge = Serge::new(&train_m)?;
+    let settings: Vec<(&str, usize, f64)> = config
+        .mus_for(k)
+        .into_iter()
+        .map(|mu| ("mu", mu, config.sigma_for_mu))
+        .chain(
+            config
+                .sigmas
+                .iter()
+                .map(|&s| ("sigma", config.mu_for_sigma.min(k), s)),
+        )
+        .collect();
+    progress.add_total(settings.len());
+    for (sweep, mu, sigma) in settings {
+        progress.check()?;
+        let params = SergeParams::new(mu, sigma)
+            .trials(config.trials_per_belief * k)
+            .seed(fseed);
+        let map = serge.run(&params)?;
+        let (errors, points) = map.errors(&test_points)?;
+        records.push(CvRecord {
+            sweep: sweep.into(),
+            mu,
+            sigma,
+            fold,
+            n_regions: map.n_regions,
+            train_log_saliency: map.log_saliency,
+            test_log_likelihood: map.log_likelihood(&test_m)?,
+            errors,
+            points,
+        });
+        progress.tick();
     }
     Ok(records)
 }

@@ -21,6 +21,7 @@
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, StandardNormal};
+use serde::{Deserialize, Serialize};
 
 use serge::learn::{TripletObservation, normalise, triplet_beliefs};
 use serge::{Belief, BeliefSet};
@@ -29,6 +30,49 @@ use crate::error::{Result, StudyError};
 
 /// Dataset names accepted by [`Dataset::generate`].
 pub const DATASETS: [&str; 3] = ["well-separated", "hallway", "lab"];
+
+/// One of the study's datasets.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum DatasetName {
+    /// 49 landmarks on a lattice, beliefs that never overlap.
+    WellSeparated,
+    /// Landmark triplets of the simulated hallway, in the normalised frame.
+    Hallway,
+    /// 55 objects of a simulated Kinect recording of a lab.
+    Lab,
+}
+
+impl DatasetName {
+    /// Every dataset, in the study's order.
+    pub const ALL: [Self; 3] = [Self::WellSeparated, Self::Hallway, Self::Lab];
+
+    /// Its name in files and on the command line.
+    #[must_use]
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Self::WellSeparated => "well-separated",
+            Self::Hallway => "hallway",
+            Self::Lab => "lab",
+        }
+    }
+
+    /// The dataset called `name`.
+    ///
+    /// # Errors
+    /// [`StudyError::InvalidParameter`] listing the names there are.
+    pub fn parse(name: &str) -> Result<Self> {
+        Self::ALL
+            .into_iter()
+            .find(|d| d.as_str() == name)
+            .ok_or_else(|| {
+                StudyError::InvalidParameter(format!(
+                    "unknown dataset `{name}` (known: {})",
+                    DATASETS.join(", ")
+                ))
+            })
+    }
+}
 
 /// A dataset: data points grouped by belief, and how beliefs are made from them.
 #[derive(Debug, Clone)]
@@ -51,14 +95,18 @@ impl Dataset {
     /// # Errors
     /// [`StudyError::InvalidParameter`] for an unknown name; simulation errors (hallway).
     pub fn generate(name: &str, seed: u64) -> Result<Self> {
+        Self::generate_named(DatasetName::parse(name)?, seed)
+    }
+
+    /// Generates dataset `name`.
+    ///
+    /// # Errors
+    /// Simulation errors (hallway).
+    pub fn generate_named(name: DatasetName, seed: u64) -> Result<Self> {
         match name {
-            "well-separated" => Ok(well_separated(seed)),
-            "hallway" => hallway(seed, 10_000),
-            "lab" => Ok(lab(seed)),
-            _ => Err(StudyError::InvalidParameter(format!(
-                "unknown dataset `{name}` (known: {})",
-                DATASETS.join(", ")
-            ))),
+            DatasetName::WellSeparated => Ok(well_separated(seed)),
+            DatasetName::Hallway => hallway(seed, 10_000),
+            DatasetName::Lab => Ok(lab(seed)),
         }
     }
 

@@ -48,13 +48,17 @@
 //! recognised that landmark when it was within effective range, instead of one value for
 //! every landmark).
 
+mod experiment;
 mod mapping;
 mod perception;
+mod report;
 mod summary;
 mod trials;
 
+pub use experiment::{FieldExperiment, FieldOutput, FieldWorld, VariantRate};
 pub use mapping::{FieldMap, MappingStats, map_field, wall_calculus};
 pub use perception::LidarPerception;
+pub use report::{THESIS_IN_VIVO, THESIS_TABLE_4_2, report};
 pub use summary::{
     BoundRange, BoundSummary, FieldSummary, MapSize, RestrictedPlans, bound_summary, map_size,
     restricted_plans, summarise,
@@ -75,6 +79,7 @@ pub const WALL_FRAME_END: u32 = 1_000_001;
 
 /// Settings of the field experiment.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct FieldParams {
     /// Seed of the world, the drive and the trials.
     pub seed: u64,
@@ -101,7 +106,22 @@ pub struct FieldParams {
     pub max_replans: usize,
     /// Distance between perception checks along a path (m).
     pub step: f64,
+    /// Worlds of the experiment: the `field` scenario drawn with seeds `seed`, `seed + 1`, …,
+    /// each mapped and navigated on its own — the experiment's shards. One world's rate says
+    /// little (they differ a lot); the report gives each and their mean. [`run_field`] runs
+    /// the world of `seed` alone.
+    #[serde(default = "one_world")]
+    pub worlds: usize,
 }
+
+fn one_world() -> usize {
+    1
+}
+
+/// Most field trials (worlds × trials) a config may ask for: a trial takes a tenth of a
+/// second to a second, so this is about a day of work (issue 17: `--worlds 2^64-1` ran with
+/// no end).
+pub const MAX_FIELD_TRIALS: u64 = 200_000;
 
 impl FieldParams {
     /// The full experiment: 200 trials per variant.
@@ -120,6 +140,7 @@ impl FieldParams {
             horizon: 4,
             max_replans: 3,
             step: 1.0,
+            worlds: 5,
         }
     }
 
@@ -130,16 +151,34 @@ impl FieldParams {
             trials: 12,
             samples: 100,
             step: 2.0,
+            worlds: 1,
             ..Self::full(seed)
         }
     }
 
-    fn validate(&self) -> Result<()> {
+    /// Checks the settings before any work.
+    ///
+    /// # Errors
+    /// [`StudyError::InvalidParameter`] naming the field.
+    pub fn validate(&self) -> Result<()> {
         let positive = |v: f64| v.is_finite() && v > 0.0;
-        if self.trials == 0 || self.samples == 0 || self.horizon == 0 {
+        if self.trials == 0 || self.samples == 0 || self.horizon == 0 || self.worlds == 0 {
             return Err(StudyError::InvalidParameter(
-                "trials, samples and horizon must be ≥ 1".into(),
+                "trials, samples, horizon and worlds must be at least 1".into(),
             ));
+        }
+        let total = (self.worlds as u64).saturating_mul(self.trials as u64);
+        if total > MAX_FIELD_TRIALS {
+            return Err(StudyError::InvalidParameter(format!(
+                "{} worlds × {} trials = {total} field trials; the limit is {MAX_FIELD_TRIALS}",
+                self.worlds, self.trials
+            )));
+        }
+        if self.seed.checked_add(self.worlds as u64).is_none() {
+            return Err(StudyError::InvalidParameter(format!(
+                "seed {} + {} worlds overflows the seeds",
+                self.seed, self.worlds
+            )));
         }
         if !(self.range_sigma.is_finite() && self.range_sigma >= 0.0) {
             return Err(StudyError::InvalidParameter(format!(

@@ -103,6 +103,7 @@ pub fn report(config: &StudyConfig, output: &Output) -> Report {
             length_vs_plan_length(&output.records, config),
         ],
         notes: DIFFERENCES.to_owned(),
+        attachments: Vec::new(),
     }
 }
 

@@ -1,0 +1,211 @@
+//! The field experiment as a [`Study`]: one shard per world, merged into the pooled rates,
+//! the rates over worlds and the distance bounds.
+
+use qsr_core::progress::Progress;
+use qsr_core::stats::MeanSd;
+use serde::{Deserialize, Serialize};
+
+use super::mapping::MappingStats;
+use super::summary::{
+    BoundRange, BoundSummary, FieldSummary, MapSize, RestrictedPlans, bound_summary, map_size,
+    restricted_plans, summarise,
+};
+use super::trials::{FieldTask, FieldTrial, TaskDraws, run_field};
+use super::{FieldParams, FieldVariant};
+use crate::error::{Result, StudyError};
+use crate::report::Report;
+use crate::shard::check_indices;
+use crate::study::Study;
+
+/// The field-site experiment of thesis §4.4.2 (see the module): every variant's trials in
+/// each of [`FieldParams::worlds`] simulated worlds.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct FieldExperiment;
+
+/// One world: how its map came out and every trial run in it.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct FieldWorld {
+    /// Its index (the shard's).
+    pub world: usize,
+    /// Its seed: the config's seed + the index.
+    pub seed: u64,
+    /// The mapping drive's figures.
+    pub mapping: MappingStats,
+    /// Why start/goal draws were redrawn.
+    pub draws: TaskDraws,
+    /// Success and failure counts per variant.
+    pub variants: Vec<FieldSummary>,
+    /// The map's size.
+    pub map_size: MapSize,
+    /// The thesis variant's tasks planned on the map and on the map restricted to nearby
+    /// triplets.
+    pub restricted_map_plans: RestrictedPlans,
+    /// The simulated site (for pictures: Fig 4.9).
+    pub site: sim2d::WorldSpec,
+    /// The mapping drive's true positions (m).
+    pub drive: Vec<[f64; 2]>,
+    /// Every trial, variant by variant.
+    pub trials: Vec<FieldTrial>,
+}
+
+/// A variant's success rate over the worlds: the mean and sample sd of the worlds' rates.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct VariantRate {
+    /// The variant.
+    pub variant: FieldVariant,
+    /// Mean of the worlds' success rates.
+    pub mean: f64,
+    /// Their sample standard deviation (0 for one world).
+    pub sd: f64,
+}
+
+/// What a run of the field experiment produced.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct FieldOutput {
+    /// The worlds, in seed order.
+    pub worlds: Vec<FieldWorld>,
+    /// Counts per variant over all worlds' trials.
+    pub variants: Vec<FieldSummary>,
+    /// Rates per variant over the worlds.
+    pub success_rate_over_worlds: Vec<VariantRate>,
+    /// Propositions 2 and 4 per variant, at the lidar's and at the effective range.
+    pub bounds: Vec<BoundSummary>,
+}
+
+impl FieldOutput {
+    /// Every trial with its world's index, world by world.
+    pub fn trials(&self) -> impl Iterator<Item = (&FieldWorld, &FieldTrial)> {
+        self.worlds
+            .iter()
+            .flat_map(|w| w.trials.iter().map(move |t| (w, t)))
+    }
+
+    /// The pooled counts of `variant`.
+    #[must_use]
+    pub fn pooled(&self, variant: FieldVariant) -> Option<&FieldSummary> {
+        self.variants.iter().find(|s| s.variant == variant)
+    }
+}
+
+/// Runs world `index` of `config`: maps it, runs every variant's trials, sizes the map.
+///
+/// # Errors
+/// [`StudyError::InvalidParameter`] for an index beyond the worlds; as [`run_field`].
+pub fn run_world(
+    config: &FieldParams,
+    index: usize,
+    progress: &dyn Progress,
+) -> Result<FieldWorld> {
+    config.validate()?;
+    if index >= config.worlds {
+        return Err(StudyError::InvalidParameter(format!(
+            "world {index} of a field experiment of {} worlds",
+            config.worlds
+        )));
+    }
+    let params = FieldParams {
+        seed: config.seed + index as u64,
+        ..config.clone()
+    };
+    let variants = FieldVariant::ALL;
+    let (field, draws, trials) = run_field(&params, &variants, progress)?;
+    let tasks: Vec<FieldTask> = trials
+        .iter()
+        .filter(|t| t.variant == FieldVariant::Thesis)
+        .map(|t| t.task)
+        .collect();
+    Ok(FieldWorld {
+        world: index,
+        seed: params.seed,
+        mapping: field.stats.clone(),
+        draws,
+        variants: summarise(&trials, &variants),
+        map_size: map_size(&field, &params)?,
+        restricted_map_plans: restricted_plans(&field, &params, &tasks)?,
+        site: field.scenario.world.spec().clone(),
+        drive: field.drive.clone(),
+        trials,
+    })
+}
+
+/// Merges worlds given in any order (each exactly once) into the experiment's output.
+///
+/// # Errors
+/// [`StudyError::InvalidParameter`] for a missing, duplicated or foreign world.
+pub fn aggregate(config: &FieldParams, shards: Vec<(usize, FieldWorld)>) -> Result<FieldOutput> {
+    check_indices(config.worlds, shards.iter().map(|(i, _)| *i))?;
+    let mut worlds: Vec<(usize, FieldWorld)> = shards;
+    worlds.sort_by_key(|(i, _)| *i);
+    for (i, w) in &worlds {
+        if w.world != *i || w.seed != config.seed + *i as u64 {
+            return Err(StudyError::InvalidParameter(format!(
+                "shard {i} holds world {} of seed {}: not this config's world {i}",
+                w.world, w.seed
+            )));
+        }
+    }
+    let worlds: Vec<FieldWorld> = worlds.into_iter().map(|(_, w)| w).collect();
+    let flat: Vec<FieldTrial> = worlds.iter().flat_map(|w| w.trials.clone()).collect();
+    let variants = FieldVariant::ALL;
+    let success_rate_over_worlds = variants
+        .iter()
+        .map(|&v| {
+            let rates: Vec<f64> = worlds
+                .iter()
+                .filter_map(|w| w.variants.iter().find(|s| s.variant == v))
+                .map(|s| s.success_rate)
+                .collect();
+            let s = MeanSd::of(&rates);
+            VariantRate {
+                variant: v,
+                mean: s.mean,
+                sd: s.sd,
+            }
+        })
+        .collect();
+    Ok(FieldOutput {
+        variants: summarise(&flat, &variants),
+        bounds: variants
+            .iter()
+            .flat_map(|&v| BoundRange::ALL.map(|r| bound_summary(&flat, v, r)))
+            .collect(),
+        success_rate_over_worlds,
+        worlds,
+    })
+}
+
+impl Study for FieldExperiment {
+    const NAME: &'static str = "field";
+    const ABOUT: &'static str = "§4.4.2: the lidar-only field-site experiment in simulation (success rate, Table 4.2, bounds)";
+    type Config = FieldParams;
+    type Output = FieldOutput;
+    type Shard = FieldWorld;
+
+    fn quick(seed: u64) -> FieldParams {
+        FieldParams::quick(seed)
+    }
+    fn full(seed: u64) -> FieldParams {
+        FieldParams::full(seed)
+    }
+    fn check(config: &FieldParams) -> Result<()> {
+        config.validate()
+    }
+    /// One shard per world.
+    fn shards(config: &FieldParams) -> Result<usize> {
+        config.validate()?;
+        Ok(config.worlds)
+    }
+    fn run_shard(
+        config: &FieldParams,
+        index: usize,
+        progress: &dyn Progress,
+    ) -> Result<FieldWorld> {
+        run_world(config, index, progress)
+    }
+    fn aggregate(config: &FieldParams, shards: Vec<(usize, FieldWorld)>) -> Result<FieldOutput> {
+        aggregate(config, shards)
+    }
+    fn report(config: &FieldParams, output: &FieldOutput) -> Report {
+        super::report::report(config, output)
+    }
+}
