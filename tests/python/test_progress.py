@@ -84,8 +84,13 @@ def test_ctrl_c_stops_a_long_study_at_once():
             state["interrupted_at"] = time.monotonic()
             _thread.interrupt_main()  # what Ctrl-C does
 
-    with pytest.raises(KeyboardInterrupt):
+    t0 = time.monotonic()
+    try:
         qrm.qlink_study("sensor-range", quick=False, seed=0, progress=progress)
+    except KeyboardInterrupt:
+        pass
+    else:  # say what was seen: a CI run under load once failed here without a trace
+        pytest.fail(f"DID NOT RAISE KeyboardInterrupt after {time.monotonic() - t0:.1f} s: {state}")
     assert state["interrupted_at"], "the study never reported progress"
     assert time.monotonic() - state["interrupted_at"] < 5.0  # the rest of the study: ~50 s
     assert state["done"] < state["total"]

@@ -113,7 +113,10 @@ where
             && let Some(cb) = callback
         {
             reported = now;
-            if let Err(e) = cb.call1(now) {
+            // A signal the callback raised or let arrive (a GUI's stop button calling
+            // `interrupt_main`) is handled here, not one watch period later: the work may
+            // be over by then and its end must not swallow the interrupt.
+            if let Err(e) = cb.call1(now).and_then(|_| py.check_signals()) {
                 watch.stop();
                 *stopped = Some(e);
             }
