@@ -73,7 +73,7 @@ pub struct FieldOutput {
 }
 
 impl FieldOutput {
-    /// Every trial with its world's index, world by world.
+    /// Every trial with its world, world by world.
     pub fn trials(&self) -> impl Iterator<Item = (&FieldWorld, &FieldTrial)> {
         self.worlds
             .iter()
