@@ -124,37 +124,42 @@ fn triplets(obs: &[Observation]) -> impl Iterator<Item = ([u32; 3], [Observation
     })
 }
 
-/// Maps the field site with the lidar (see the module docs).
-///
-/// # Errors
-/// Simulation and mapping errors; [`qlink::QlinkError::EmptyMap`] when no scan recognised three
-/// landmarks at once.
-pub fn map_field(params: &FieldParams) -> Result<FieldMap> {
-    params.validate()?;
-    let mut scenario = sim2d::scenario("field", params.seed, None)?;
-    scenario.lidar.range_sigma = params.range_sigma;
-    let frames = scenario.run(params.seed, true)?;
-    let frame_pts = wall_frame(&scenario.world)?;
+/// What the drive's first pass recognised, scan by scan.
+struct Recognised {
+    /// Per id: every object it was recognised from, with counts (for scoring only).
+    hits: BTreeMap<u32, Vec<(Hit, usize)>>,
+    /// Per id: (frame, world position estimate) of every scan it was seen in.
+    seen_at: BTreeMap<u32, Vec<(usize, [f64; 2])>>,
+    /// Range of every recognised landmark (m).
+    distances: Vec<f64>,
+    /// Point detections.
+    detections: usize,
+    /// Scans in which both walls were extracted.
+    wall_frames: usize,
+    /// The drive's true positions.
+    drive: Vec<[f64; 2]>,
+    /// Per scan: time, its observations (unique ids), both walls extracted, the pose.
+    per_frame: Vec<(f64, Vec<Observation>, bool, Pose)>,
+}
+
+/// Pass 1: every scan through the extractor and the recogniser.
+fn recognise(
+    frames: &[sim2d::Frame],
+    recognizer: &mut TriangleRecognizer,
+    cov: [[f64; 2]; 2],
+) -> Result<Recognised> {
     let extractor = ExtractorConfig::default();
-    let mut recognizer = TriangleRecognizer::new(params.tolerance).with_min_votes(params.min_votes);
-    let var = params.sigma * params.sigma;
-    let cov = [[var, 0.0], [0.0, var]];
-    let config = PqrmConfig {
-        samples: params.samples,
-        seed: params.seed,
-        ..PqrmConfig::default()
+    let mut r = Recognised {
+        hits: BTreeMap::new(),
+        seen_at: BTreeMap::new(),
+        distances: Vec::new(),
+        detections: 0,
+        wall_frames: 0,
+        drive: Vec::with_capacity(frames.len()),
+        per_frame: Vec::new(),
     };
-    // pass 1: recognise every scan; what each id was seen as (for scoring only)
-    let mut hits: BTreeMap<u32, Vec<(Hit, usize)>> = BTreeMap::new();
-    // per id: (frame, world position estimate)
-    let mut seen_at: BTreeMap<u32, Vec<(usize, [f64; 2])>> = BTreeMap::new();
-    let mut distances: Vec<f64> = Vec::new();
-    let (mut detections, mut wall_frames) = (0usize, 0usize);
-    let mut drive = Vec::with_capacity(frames.len());
-    // per frame: its observations (unique ids) and whether both walls were extracted
-    let mut per_frame: Vec<(f64, Vec<Observation>, bool, Pose)> = Vec::new();
     for (fi, f) in frames.iter().enumerate() {
-        drive.push([f.pose.x, f.pose.y]);
+        r.drive.push([f.pose.x, f.pose.y]);
         let Some(scan) = &f.scan else { continue };
         let (cands, walls) = point_and_walls(scan, &extractor);
         let ids = recognizer.recognise(&cands.iter().map(|c| c.centre).collect::<Vec<_>>());
@@ -162,9 +167,9 @@ pub fn map_field(params: &FieldParams) -> Result<FieldMap> {
         let mut unique = BTreeSet::new();
         let (s, c) = f.pose.theta.sin_cos();
         for (cand, &id) in cands.iter().zip(&ids) {
-            detections += 1;
+            r.detections += 1;
             if let Some(h) = cand.truth {
-                let list = hits.entry(id).or_default();
+                let list = r.hits.entry(id).or_default();
                 match list.iter_mut().find(|(k, _)| *k == h) {
                     Some((_, n)) => *n += 1,
                     None => list.push((h, 1)),
@@ -175,32 +180,33 @@ pub fn map_field(params: &FieldParams) -> Result<FieldMap> {
             }
             let [x, y] = cand.centre;
             let world = [f.pose.x + c * x - s * y, f.pose.y + s * x + c * y];
-            seen_at.entry(id).or_default().push((fi, world));
-            distances.push(x.hypot(y));
+            r.seen_at.entry(id).or_default().push((fi, world));
+            r.distances.push(x.hypot(y));
             obs.push(Observation::new(LandmarkId(id), cand.centre, cov)?);
         }
         if walls {
-            wall_frames += 1;
+            r.wall_frames += 1;
         }
-        per_frame.push((f.t, obs, walls, f.pose));
+        r.per_frame.push((f.t, obs, walls, f.pose));
     }
-    // an id stands for the object it was most often recognised from
-    let truth: BTreeMap<u32, Hit> = hits
-        .iter()
-        .filter_map(|(&id, list)| list.iter().max_by_key(|x| x.1).map(|(h, _)| (id, *h)))
-        .collect();
-    let aliased: usize = hits
-        .iter()
-        .map(|(id, list)| {
-            list.iter()
-                .filter(|(h, _)| truth.get(id) != Some(h))
-                .map(|(_, n)| n)
-                .sum::<usize>()
-        })
-        .sum();
-    // pass 2: the layers, from triplets (and landmarks) seen often enough
+    Ok(r)
+}
+
+/// Pass 2: the two layers, from the triplets (and, for the walls' layer, the landmarks) seen
+/// in at least `min_observations` scans.
+fn layers(
+    r: &Recognised,
+    params: &FieldParams,
+    frame_pts: [[f64; 2]; 2],
+    cov: [[f64; 2]; 2],
+) -> Result<(Pqrm, Pqrm)> {
+    let config = PqrmConfig {
+        samples: params.samples,
+        seed: params.seed,
+        ..PqrmConfig::default()
+    };
     let mut count: BTreeMap<[u32; 3], usize> = BTreeMap::new();
-    for (_, obs, _, _) in &per_frame {
+    for (_, obs, _, _) in &r.per_frame {
         for (k, _) in triplets(obs) {
             *count.entry(k).or_insert(0) += 1;
         }
@@ -208,7 +214,7 @@ pub fn map_field(params: &FieldParams) -> Result<FieldMap> {
     let often = |k: &[u32; 3]| count.get(k).is_some_and(|&n| n >= params.min_observations);
     let mut points_layer = Pqrm::new(Calculus::builtin("left-right")?, config)?;
     let mut wall_layer = Pqrm::new(wall_calculus()?, config)?;
-    for (t, obs, walls, pose) in &per_frame {
+    for (t, obs, walls, pose) in &r.per_frame {
         for (k, three) in triplets(obs) {
             if often(&k) {
                 points_layer.update(&Scan::new(*t, 0, three.to_vec())?)?;
@@ -218,7 +224,7 @@ pub fn map_field(params: &FieldParams) -> Result<FieldMap> {
             let sl = pose.to_local(frame_pts[0]);
             let el = pose.to_local(frame_pts[1]);
             for o in obs {
-                if seen_at.get(&o.id.0).map_or(0, Vec::len) < params.min_observations {
+                if r.seen_at.get(&o.id.0).map_or(0, Vec::len) < params.min_observations {
                     continue;
                 }
                 let scan = Scan::new(
@@ -234,25 +240,31 @@ pub fn map_field(params: &FieldParams) -> Result<FieldMap> {
             }
         }
     }
-    distances.sort_by(f64::total_cmp);
-    let effective_range = distances.get(distances.len() / 2).copied().unwrap_or(10.0);
-    let (point_elements, wall_elements) = (points_layer.len(), wall_layer.len());
-    let map = QualitativeMap::new(vec![
-        Layer::Probabilistic(points_layer),
-        Layer::Probabilistic(wall_layer),
-    ])?;
-    // visibility: recognised / scans taken within effective range of the id's mean position
+    Ok((points_layer, wall_layer))
+}
+
+/// Per mapped id: recognised / scans taken within the effective range of the id's mean
+/// position; for the walls' frame, the scans that extracted both walls out of those taken in
+/// or by the corridor.
+fn visibility(
+    map: &QualitativeMap,
+    r: &Recognised,
+    frames: &[sim2d::Frame],
+    effective_range: f64,
+    frame_pts: [[f64; 2]; 2],
+) -> BTreeMap<u32, f64> {
     let mut visibility = BTreeMap::new();
     for id in map.landmarks() {
-        let v = match seen_at.get(&id) {
+        let v = match r.seen_at.get(&id) {
             Some(list) => {
                 let n = list.len() as f64;
                 let mean = list
                     .iter()
                     .fold([0.0, 0.0], |m, (_, p)| [m[0] + p[0] / n, m[1] + p[1] / n]);
-                let near = drive
+                let near = r
+                    .drive
                     .iter()
-                    .zip(&frames)
+                    .zip(frames)
                     .filter(|(p, f)| {
                         f.scan.is_some()
                             && (p[0] - mean[0]).hypot(p[1] - mean[1]) <= effective_range
@@ -260,18 +272,64 @@ pub fn map_field(params: &FieldParams) -> Result<FieldMap> {
                     .count();
                 (n / near.max(1) as f64).clamp(0.02, 1.0)
             }
-            // the walls' frame: seen in the scans that extracted both walls, out of the
-            // scans taken in or by the corridor
             None => {
-                let near = drive
+                let near = r
+                    .drive
                     .iter()
                     .filter(|p| (p[0] - frame_pts[0][0]).abs() <= 50.0 && p[1].abs() <= 20.0)
                     .count();
-                (wall_frames as f64 / near.max(1) as f64).clamp(0.02, 1.0)
+                (r.wall_frames as f64 / near.max(1) as f64).clamp(0.02, 1.0)
             }
         };
         visibility.insert(id, v);
     }
+    visibility
+}
+
+/// Maps the field site with the lidar (see the module docs).
+///
+/// # Errors
+/// Simulation and mapping errors; [`qlink::QlinkError::EmptyMap`] when no scan recognised three
+/// landmarks at once.
+pub fn map_field(params: &FieldParams) -> Result<FieldMap> {
+    params.validate()?;
+    let mut scenario = sim2d::scenario("field", params.seed, None)?;
+    scenario.lidar.range_sigma = params.range_sigma;
+    let frames = scenario.run(params.seed, true)?;
+    let frame_pts = wall_frame(&scenario.world)?;
+    let mut recognizer = TriangleRecognizer::new(params.tolerance).with_min_votes(params.min_votes);
+    let var = params.sigma * params.sigma;
+    let cov = [[var, 0.0], [0.0, var]];
+    let mut r = recognise(&frames, &mut recognizer, cov)?;
+    // an id stands for the object it was most often recognised from
+    let truth: BTreeMap<u32, Hit> = r
+        .hits
+        .iter()
+        .filter_map(|(&id, list)| list.iter().max_by_key(|x| x.1).map(|(h, _)| (id, *h)))
+        .collect();
+    let aliased: usize = r
+        .hits
+        .iter()
+        .map(|(id, list)| {
+            list.iter()
+                .filter(|(h, _)| truth.get(id) != Some(h))
+                .map(|(_, n)| n)
+                .sum::<usize>()
+        })
+        .sum();
+    let (points_layer, wall_layer) = layers(&r, params, frame_pts, cov)?;
+    r.distances.sort_by(f64::total_cmp);
+    let effective_range = r
+        .distances
+        .get(r.distances.len() / 2)
+        .copied()
+        .unwrap_or(10.0);
+    let (point_elements, wall_elements) = (points_layer.len(), wall_layer.len());
+    let map = QualitativeMap::new(vec![
+        Layer::Probabilistic(points_layer),
+        Layer::Probabilistic(wall_layer),
+    ])?;
+    let visibility = visibility(&map, &r, &frames, effective_range, frame_pts);
     let mapped: BTreeSet<u32> = map
         .landmarks()
         .into_iter()
@@ -287,20 +345,20 @@ pub fn map_field(params: &FieldParams) -> Result<FieldMap> {
         real_landmarks: real,
         false_landmarks: mapped.len() - real,
         world_landmarks: scenario.world.spec().landmarks.len(),
-        detections,
+        detections: r.detections,
         aliased_detections: aliased,
-        wall_frames,
+        wall_frames: r.wall_frames,
         point_elements,
         wall_elements,
         effective_range,
     };
     Ok(FieldMap {
         scenario,
-        drive,
+        drive: r.drive,
         map,
         recognizer,
         truth,
-        recognitions: hits,
+        recognitions: r.hits,
         visibility,
         wall_frame: frame_pts,
         stats,
