@@ -4,7 +4,6 @@
 use std::path::PathBuf;
 
 use anyhow::Result;
-use studies::Study;
 use studies::qlink::field::{FieldExperiment, FieldParams};
 
 /// `qrm qlink field`.
@@ -42,8 +41,5 @@ pub fn run(a: FieldArgs) -> Result<()> {
     if let Some(n) = a.worlds {
         config.worlds = n;
     }
-    let study = studies::find(<FieldExperiment as Study>::NAME)?;
-    let config = serde_json::to_value(&config)?;
-    study.check(&config)?; // rejects a bad config (0 trials, a day's worth of worlds) first
-    crate::study_cmd::run_and_write(study, &config, &a.out)
+    crate::study_cmd::run_study::<FieldExperiment>(&config, &a.out)
 }

@@ -523,11 +523,7 @@ fn study(a: StudyArgs) -> Result<()> {
     if let Some(l) = a.landmarks {
         config.landmarks = l;
     }
-    let study = studies::find(<MonteCarlo as Study>::NAME)?;
-    let config = serde_json::to_value(&config)?;
-    // every input is checked before anything is created on disk
-    study.check(&config)?;
-    crate::study_cmd::run_and_write(study, &config, &a.out)
+    crate::study_cmd::run_study::<MonteCarlo>(&config, &a.out)
 }
 
 fn real(a: RealArgs) -> Result<()> {

@@ -5,7 +5,6 @@ use std::path::PathBuf;
 
 use anyhow::Result;
 use qlink::{Arrival, References};
-use studies::Study;
 use studies::qlink::table_4_1::{ArcRadius, StudyConfig, Table41, Trials};
 
 /// `qrm qlink ...`.
@@ -96,8 +95,5 @@ fn study(a: StudyArgs) -> Result<()> {
     if a.arcs_at_sensor_range {
         config.radius = ArcRadius::SensorRange;
     }
-    let study = studies::find(<Table41 as Study>::NAME)?;
-    let config = serde_json::to_value(&config)?;
-    study.check(&config)?; // rejects a bad config before any work
-    crate::study_cmd::run_and_write(study, &config, &a.out)
+    crate::study_cmd::run_study::<Table41>(&config, &a.out)
 }

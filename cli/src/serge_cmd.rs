@@ -6,7 +6,6 @@ use std::time::Instant;
 use anyhow::{Context, Result, bail};
 use serde_json::json;
 use serge::{BeliefSet, CellMasses, Grid, SalientRegionMap, Serge, SergeParams};
-use studies::Study;
 use studies::serge::SergeStudy;
 use studies::serge::cross_validation::StudyConfig;
 use studies::serge::datasets::{DATASETS, DatasetName};
@@ -221,10 +220,7 @@ fn study(a: StudyArgs) -> Result<()> {
     if a.dataset != "all" {
         config.datasets = vec![DatasetName::parse(&a.dataset)?];
     }
-    let study = studies::find(<SergeStudy as Study>::NAME)?;
-    let config = serde_json::to_value(&config)?;
-    study.check(&config)?;
-    crate::study_cmd::run_and_write(study, &config, &a.out)
+    crate::study_cmd::run_study::<SergeStudy>(&config, &a.out)
 }
 
 // ---------------------------------------------------------------------------------------

@@ -268,6 +268,16 @@ fn to_toml(v: &serde_json::Value) -> Result<String> {
     toml::to_string(&strip(v)).context("the config as TOML")
 }
 
+/// Runs study `S` with a typed config (what an alias such as `qrm qlink field` builds from its
+/// flags) through the same runner as `qrm study run`; the config is checked before anything
+/// is created on disk.
+pub fn run_study<S: studies::Study>(config: &S::Config, out: &Path) -> Result<()> {
+    let study = studies::find(S::NAME)?;
+    let config = serde_json::to_value(config)?;
+    study.check(&config)?;
+    run_and_write(study, &config, out)
+}
+
 /// Runs `config` with a progress bar and writes everything into `out` (staged: nothing is
 /// left half-written on an error or Ctrl-C).
 pub fn run_and_write(study: &dyn AnyStudy, config: &serde_json::Value, out: &Path) -> Result<()> {

@@ -225,10 +225,8 @@ pub(crate) fn serge_cross_validate(
         } else {
             studies::serge::cross_validation::StudyConfig::full(seed)
         };
-        let mut data = studies::serge::datasets::Dataset::generate(&name, seed)?;
-        if data.observations.is_some() {
-            data = data.with_samples(config.samples);
-        }
+        let name = studies::serge::datasets::DatasetName::parse(&name)?;
+        let data = studies::serge::study::dataset(name, &config)?;
         studies::serge::cross_validation::cross_validate(&data, &config, watch)
     })?
     .map_err(crate::errors::study_err)?;
