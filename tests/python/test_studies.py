@@ -120,3 +120,29 @@ def test_the_field_and_serge_studies_run_from_python_typed(name, changes, table)
     with pytest.raises(qrm.InvalidInput, match="worlds|datasets"):
         bad = dict(cfg, worlds=0) if name == "field" else dict(cfg, datasets=[])
         qrm.studies.run(name, bad)
+
+
+def test_the_real_data_study_runs_from_python_as_on_the_command_line(mrclam_dir, qrm_bin, tmp_path):
+    # issue 14 §2: the real-data study through qrm.studies.run, the same real.csv as the CLI
+    cfg = qrm.studies.config("real-data", seed=3)
+    cfg.update(input=str(mrclam_dir), max_frames=40, samples=30, variants=cfg["variants"][:1])
+    run = qrm.studies.run("real-data", cfg)
+    conforms(run, qt.StudyRun)
+    report = run["report"]
+    assert [c["verdict"] in ("agree", "disagree") for c in report["claims"]] == [True] * 4
+    assert len(run["output"]["results"]) == 6 and len(run["output"]["sensor_models"]) == 6
+    out = tmp_path / "real"
+    subprocess.run(
+        [qrm_bin, "pqrm", "real", "--input", str(mrclam_dir), "--max-frames", "40",
+         "--samples", "30", "--seed", "3", "--out", str(out)],
+        check=True,
+        capture_output=True,
+    )
+    with open(out / "real.csv", newline="") as f:
+        cli_rows = list(csv.reader(f))
+    table = next(t for t in report["tables"] if t["name"] == "real")
+    assert cli_rows == [[c["key"] for c in table["columns"]]] + [
+        [cell["csv"] for cell in row] for row in table["rows"]
+    ]
+    with pytest.raises(qrm.InvalidInput, match="no such directory"):
+        qrm.studies.run("real-data", dict(cfg, input=str(tmp_path / "nothing")))

@@ -32,7 +32,7 @@ pub struct Dataset {
 }
 
 /// Noise model for range-bearing sensors without per-measurement covariances.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct RangeBearingNoise {
     /// Range standard deviation (m).
     pub sigma_range: f64,

@@ -55,9 +55,10 @@ pub fn default_grid() -> Vec<f64> {
     (0..=14).map(|k| 2f64.powf(-f64::from(k) / 2.0)).collect()
 }
 
-/// How the tempering exponent of a map is set.
+/// How the tempering exponent of a map is set. In a config it is written as a user types it:
+/// `"auto"` or a number (`temper = 0.3`), checked on reading.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(rename_all = "kebab-case")]
+#[serde(try_from = "TemperValue", into = "TemperValue")]
 pub enum TemperChoice {
     /// A given τ ∈ (0, 1] (1 = the thesis's eq. 2.10).
     Fixed(f64),
@@ -86,6 +87,33 @@ impl TemperChoice {
             )));
         }
         Ok(Self::Fixed(v))
+    }
+}
+
+/// [`TemperChoice`] as written in a config.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(untagged)]
+enum TemperValue {
+    Number(f64),
+    Text(String),
+}
+
+impl TryFrom<TemperValue> for TemperChoice {
+    type Error = PqrmError;
+    fn try_from(v: TemperValue) -> Result<Self> {
+        match v {
+            TemperValue::Number(t) => Self::parse(&t.to_string()),
+            TemperValue::Text(s) => Self::parse(&s),
+        }
+    }
+}
+
+impl From<TemperChoice> for TemperValue {
+    fn from(c: TemperChoice) -> Self {
+        match c {
+            TemperChoice::Fixed(t) => Self::Number(t),
+            TemperChoice::Auto => Self::Text("auto".to_owned()),
+        }
     }
 }
 
@@ -455,6 +483,20 @@ mod tests {
         for f in 0..5 {
             assert!(b.contains(&f));
         }
+    }
+
+    #[test]
+    fn a_config_writes_temper_as_auto_or_a_number_and_checks_it_on_reading() {
+        let j = |c: TemperChoice| serde_json::to_string(&c).unwrap_or_default();
+        assert_eq!(j(TemperChoice::Auto), "\"auto\"");
+        assert_eq!(j(TemperChoice::Fixed(0.3)), "0.3");
+        let r = |s: &str| serde_json::from_str::<TemperChoice>(s);
+        assert_eq!(r("0.3").ok(), Some(TemperChoice::Fixed(0.3)));
+        assert_eq!(r("1").ok(), Some(TemperChoice::Fixed(1.0)));
+        assert_eq!(r("\"AUTO\"").ok(), Some(TemperChoice::Auto));
+        let e = r("1.5").err().map(|e| e.to_string()).unwrap_or_default();
+        assert!(e.contains("(0, 1]"), "{e}");
+        assert!(r("\"often\"").is_err());
     }
 
     #[test]

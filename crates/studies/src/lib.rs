@@ -18,6 +18,7 @@
 //! | module | thesis | what |
 //! |---|---|---|
 //! | [`pqrm::monte_carlo`] | §2.3.1, Figs 2.6–2.11 | PQRM map quality vs noise, six calculi (the run is `pqrm::study`) |
+//! | [`pqrm::real_data`] | §2.3.2, Figs 2.14–2.16 | PQRM on a surveyed recording (MRCLAM): baselines, calibration, tempering, sensor models, many robots |
 //! | [`qlink::table_4_1`] | §4.4.1, Table 4.1, Figs 4.6–4.7 | navigation failure rate vs sensor range and landmark size |
 //! | [`qlink::field`] | §4.4.2, Table 4.2 | the lidar-only field-site experiment in simulation |
 //! | [`serge::datasets`] | §3.4 | the well-separated, lab and hallway datasets |

@@ -7,6 +7,7 @@ use crate::study::{AnyStudy, Registered};
 /// Every study, in the thesis's order.
 pub static STUDIES: &[&dyn AnyStudy] = &[
     &Registered::<crate::pqrm::monte_carlo::MonteCarlo>::new(),
+    &Registered::<crate::pqrm::real_data::RealData>::new(),
     &Registered::<crate::serge::SergeStudy>::new(),
     &Registered::<crate::qlink::table_4_1::Table41>::new(),
     &Registered::<crate::qlink::field::FieldExperiment>::new(),

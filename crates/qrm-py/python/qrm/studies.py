@@ -3,7 +3,7 @@ on the command line (the studies themselves are in the Rust `studies` crate).
 
     >>> import qrm
     >>> [name for name, _ in qrm.studies.available()]
-    ['monte-carlo', 'serge-cv', 'table-4-1', 'field']
+    ['monte-carlo', 'real-data', 'serge-cv', 'table-4-1', 'field']
     >>> cfg = qrm.studies.config("table-4-1")          # the quick config, a dict to edit
     >>> cfg["pairs"] = 40
     >>> run = qrm.studies.run("table-4-1", cfg)        # doctest: +SKIP

@@ -1,0 +1,391 @@
+//! The real-data study: thesis §2.3.2 (the New College dataset, Figs 2.14–2.16) redone on a
+//! recording whose landmarks are surveyed (UTIAS MRCLAM), so that a map can be scored
+//! against a truth that does not come from the same measurements.
+//!
+//! Beyond the thesis, because a robot developer bringing a recording needs to know: is the
+//! map better than voting frame by frame (the per-triplet majority vote), is it honest about
+//! its certainty (a reliability diagram), which inverse sensor model and tempering suit the
+//! sensor, how τ is chosen without ground truth, and what many robots gain by merging maps.
+//!
+//! **Shards.** Shard 0 is the main run: τ chosen from the recording, the six maps, the maps
+//! at τ = 1 and at the chosen τ, and the robots alone, pooled and merged (they use the main
+//! run's τ). Shard `1 + i` maps the recording under sensor variant `i`. Each shard reads the
+//! recording itself ([`recording::read`]), so the config's `input` must be readable where the
+//! shard runs.
+
+pub mod recording;
+mod report;
+
+use std::path::PathBuf;
+
+use pqrm::PqrmConfig;
+use pqrm::loaders::RangeBearingNoise;
+use pqrm::robots::{RobotComparison, compare_robots};
+use pqrm::sensor::SensorModel;
+use pqrm::study::{RealCalculusResult, SensorVariant, run_real_tempered, sensor_sweep};
+use pqrm::temper::{TemperChoice, TemperFit, TemperOptions, fit_temper};
+use qsr_core::Calculus;
+use qsr_core::progress::Progress;
+use serde::{Deserialize, Serialize};
+
+use crate::error::{Result, StudyError};
+use crate::report::Report;
+use crate::study::Study;
+use recording::{Recording, RecordingSummary};
+
+/// Where the recording's range-bearing noise comes from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum NoiseSource {
+    /// Fitted from the recording itself (the spread of distances between landmarks seen
+    /// together; `pqrm::calibrate::fit_noise`, no ground truth).
+    Fitted,
+    /// `sigma_range` and `sigma_bearing` of the config.
+    Given,
+}
+
+/// One (inverse sensor model, tempering) variant the report compares.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Variant {
+    /// The inverse sensor model.
+    pub sensor: SensorModel,
+    /// The tempering exponent τ ∈ (0, 1].
+    pub temper: f64,
+}
+
+/// What the real-data study runs.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RealDataConfig {
+    /// The MRCLAM recording's directory (landmarks surveyed in `Landmark_Groundtruth.dat`).
+    pub input: PathBuf,
+    /// Calculi, finest first (the coarser ones are read off the finest one's counts).
+    pub calculi: Vec<String>,
+    /// Samples per landmark per frame.
+    pub samples: usize,
+    /// Where the range-bearing noise comes from.
+    pub noise: NoiseSource,
+    /// Range noise (m): the noise with `noise = "given"`, the noise the recording is first
+    /// read with to fit it otherwise.
+    pub sigma_range: f64,
+    /// Bearing noise (rad), as `sigma_range`.
+    pub sigma_bearing: f64,
+    /// Drop a detection whose distances to its frame's other landmarks are off those pairs'
+    /// medians by more than this many σ of the fitted noise (`None`: keep every detection).
+    #[serde(default)]
+    pub gate_sigmas: Option<f64>,
+    /// Map only the first N frames that see three or more landmarks (`None`: all).
+    #[serde(default)]
+    pub max_frames: Option<usize>,
+    /// The main run's inverse sensor model.
+    pub sensor: SensorModel,
+    /// The main run's tempering: a number in (0, 1] (1 = the thesis's eq. 2.10) or `"auto"`,
+    /// one τ per calculus chosen from the recording. The report compares τ = 1 with the
+    /// chosen τ either way.
+    pub temper: TemperChoice,
+    /// The sensor models and temperings the report compares, one shard each.
+    pub variants: Vec<Variant>,
+    /// Seed of the sampler.
+    pub seed: u64,
+}
+
+impl RealDataConfig {
+    /// Where the study looks for the recording unless told: the repository's copy.
+    pub const DEFAULT_INPUT: &'static str = "../shared/data/mrclam-dataset7";
+    /// The gate of the full study: 3σ.
+    pub const GATE_SIGMAS: f64 = 3.0;
+
+    /// The thesis's scale: every frame, 1,000 samples per landmark.
+    #[must_use]
+    pub fn full(seed: u64) -> Self {
+        Self {
+            input: PathBuf::from(Self::DEFAULT_INPUT),
+            calculi: qsr_core::POINT_CALCULI
+                .iter()
+                .map(|s| (*s).to_owned())
+                .collect(),
+            samples: 1000,
+            noise: NoiseSource::Fitted,
+            sigma_range: RangeBearingNoise::MRCLAM.sigma_range,
+            sigma_bearing: RangeBearingNoise::MRCLAM.sigma_bearing,
+            gate_sigmas: Some(Self::GATE_SIGMAS),
+            max_frames: None,
+            sensor: SensorModel::Gaussian,
+            temper: TemperChoice::Fixed(1.0),
+            variants: standard_variants(),
+            seed,
+        }
+    }
+
+    /// A first look in a second: the first 120 frames, 80 samples.
+    #[must_use]
+    pub fn quick(seed: u64) -> Self {
+        Self {
+            samples: 80,
+            max_frames: Some(120),
+            ..Self::full(seed)
+        }
+    }
+
+    /// The mapper's settings of the main run (τ set per calculus later).
+    fn pqrm_config(&self) -> PqrmConfig {
+        PqrmConfig {
+            samples: self.samples,
+            seed: self.seed,
+            sensor: self.sensor,
+            ..PqrmConfig::default()
+        }
+    }
+}
+
+/// The variants every report compares ([`pqrm::study::standard_variants`]).
+#[must_use]
+pub fn standard_variants() -> Vec<Variant> {
+    pqrm::study::standard_variants()
+        .into_iter()
+        .map(|(sensor, temper)| Variant { sensor, temper })
+        .collect()
+}
+
+/// τ chosen from the recording beside the maps at τ = 1 and at the chosen τ.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Tempering {
+    /// Per calculus: the held-out log score of every τ tried, and the one chosen.
+    pub fits: Vec<TemperFit>,
+    /// The maps at the chosen τ.
+    pub chosen: Vec<RealCalculusResult>,
+    /// The maps at τ = 1.
+    pub untempered: Vec<RealCalculusResult>,
+}
+
+/// What shard 0 produces: everything but the sensor variants.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct MainRun {
+    /// The recording as mapped.
+    pub recording: RecordingSummary,
+    /// The main run, one result per calculus.
+    pub results: Vec<RealCalculusResult>,
+    /// τ chosen from the data and its effect (`None`: it could not be chosen).
+    pub tempering: Option<Tempering>,
+    /// Why τ could not be chosen (with `tempering` `None` and a fixed τ).
+    pub tempering_failed: Option<String>,
+    /// Each robot alone, pooled, merged (empty for a one-robot recording).
+    pub robots: Vec<RobotComparison>,
+}
+
+/// One shard's result.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case", tag = "part")]
+pub enum RealDataShard {
+    /// Shard 0.
+    Main(Box<MainRun>),
+    /// Shard `1 + i`: variant `i`, one row per calculus.
+    Variant {
+        /// The rows.
+        rows: Vec<SensorVariant>,
+    },
+}
+
+/// A run: the main run and the sensor variants.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct RealDataOutput {
+    /// Shard 0.
+    #[serde(flatten)]
+    pub main: MainRun,
+    /// Every variant's rows, in the config's order.
+    pub sensor_models: Vec<SensorVariant>,
+}
+
+/// The study of thesis §2.3.2 on a surveyed recording.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct RealData;
+
+impl Study for RealData {
+    const NAME: &'static str = "real-data";
+    const ABOUT: &'static str =
+        "§2.3.2: PQRM on a real recording with surveyed landmarks (MRCLAM; Figs 2.14-2.16)";
+    type Config = RealDataConfig;
+    type Output = RealDataOutput;
+    type Shard = RealDataShard;
+
+    fn quick(seed: u64) -> RealDataConfig {
+        RealDataConfig::quick(seed)
+    }
+    fn full(seed: u64) -> RealDataConfig {
+        RealDataConfig::full(seed)
+    }
+    fn check(c: &RealDataConfig) -> Result<()> {
+        let bad = |what: String| Err(StudyError::InvalidParameter(what));
+        if c.calculi.is_empty() {
+            return bad("calculi: none given".into());
+        }
+        for name in &c.calculi {
+            Calculus::resolve(name)?;
+        }
+        for (field, v) in [
+            ("sigma_range", c.sigma_range),
+            ("sigma_bearing", c.sigma_bearing),
+        ] {
+            if !(v.is_finite() && v >= 0.0) {
+                return bad(format!("{field} = {v}: a noise must be finite and >= 0"));
+            }
+        }
+        if let Some(z) = c.gate_sigmas
+            && !(z.is_finite() && z > 0.0)
+        {
+            return bad(format!("gate_sigmas = {z}: must be a positive number of σ"));
+        }
+        if c.max_frames == Some(0) {
+            return bad("max_frames = 0: no frame to map".into());
+        }
+        c.pqrm_config().validate()?;
+        for (i, v) in c.variants.iter().enumerate() {
+            PqrmConfig {
+                sensor: v.sensor,
+                temper: v.temper,
+                ..c.pqrm_config()
+            }
+            .validate()
+            .map_err(|e| StudyError::InvalidParameter(format!("variants[{i}]: {e}")))?;
+        }
+        Ok(())
+    }
+    /// The main run and one shard per sensor variant.
+    fn shards(c: &RealDataConfig) -> Result<usize> {
+        Ok(1 + c.variants.len())
+    }
+    fn run_shard(
+        c: &RealDataConfig,
+        index: usize,
+        progress: &dyn Progress,
+    ) -> Result<RealDataShard> {
+        let n = Self::shards(c)?;
+        if index >= n {
+            return Err(StudyError::InvalidParameter(format!(
+                "shard {index} of a study with {n} shards"
+            )));
+        }
+        let recording = recording::read(c)?;
+        if index == 0 {
+            return Ok(RealDataShard::Main(Box::new(main_run(
+                c, recording, progress,
+            )?)));
+        }
+        let v = c.variants[index - 1];
+        progress.add_total(recording.data.scans.len());
+        let rows = sensor_sweep(
+            &recording.data,
+            &c.calculi,
+            c.pqrm_config(),
+            &[(v.sensor, v.temper)],
+            progress,
+        )?;
+        Ok(RealDataShard::Variant { rows })
+    }
+    fn aggregate(
+        c: &RealDataConfig,
+        shards: Vec<(usize, RealDataShard)>,
+    ) -> Result<RealDataOutput> {
+        let n = Self::shards(c)?;
+        crate::shard::check_indices(n, shards.iter().map(|s| s.0))?;
+        let mut shards = shards;
+        shards.sort_by_key(|s| s.0);
+        let mut main = None;
+        let mut sensor_models = Vec::new();
+        for (i, s) in shards {
+            match (i, s) {
+                (0, RealDataShard::Main(m)) => main = Some(*m),
+                (i, RealDataShard::Variant { rows }) if i > 0 => sensor_models.extend(rows),
+                (i, _) => {
+                    return Err(StudyError::InvalidParameter(format!(
+                        "shard {i} holds the other part (shard 0 is the main run, the others variants)"
+                    )));
+                }
+            }
+        }
+        let main = main.ok_or_else(|| StudyError::InvalidParameter("no main run".into()))?;
+        Ok(RealDataOutput {
+            main,
+            sensor_models,
+        })
+    }
+    fn report(c: &RealDataConfig, output: &RealDataOutput) -> Report {
+        report::report(c, output)
+    }
+}
+
+/// Shard 0: τ from the data, the main maps, τ = 1 beside the chosen τ, the robots.
+fn main_run(c: &RealDataConfig, rec: Recording, progress: &dyn Progress) -> Result<MainRun> {
+    let data = &rec.data;
+    let frames = data.scans.len();
+    let config = c.pqrm_config();
+    let calcs = c
+        .calculi
+        .iter()
+        .map(|n| Calculus::resolve(n))
+        .collect::<std::result::Result<Vec<_>, _>>()?;
+    // τ chosen from the data is always measured (the report compares it with τ = 1); the
+    // main run uses it only with `temper = "auto"`.
+    progress.add_total(2 * frames);
+    let (fits, tempering_failed) = match fit_temper(
+        &calcs,
+        &data.scans,
+        config,
+        &TemperOptions::default(),
+        progress,
+    ) {
+        Ok(f) => (Some(f), None),
+        Err(e) if c.temper == TemperChoice::Auto => return Err(e.into()),
+        Err(e) => (None, Some(e.to_string())),
+    };
+    let fitted: Option<Vec<f64>> = fits.as_ref().map(|f| f.iter().map(|f| f.chosen).collect());
+    let tempers = match (c.temper, &fitted) {
+        (TemperChoice::Fixed(t), _) => vec![t; c.calculi.len()],
+        (TemperChoice::Auto, Some(f)) => f.clone(),
+        (TemperChoice::Auto, None) => {
+            return Err(StudyError::InvalidParameter("no τ was chosen".into()));
+        }
+    };
+    progress.add_total(frames);
+    let results = run_real_tempered(data, &c.calculi, config, &tempers, progress)?;
+    let n_robots = data
+        .scans
+        .iter()
+        .map(|s| s.robot)
+        .collect::<std::collections::BTreeSet<_>>()
+        .len();
+    let robots = if n_robots >= 2 {
+        progress.add_total(2 * frames * calcs.len());
+        compare_robots(data, &calcs, config, &tempers, progress)?
+    } else {
+        Vec::new()
+    };
+    let tempering = match (fits, fitted) {
+        (Some(fits), Some(fitted)) => {
+            progress.add_total(2 * frames);
+            let at = |ts: &[f64]| -> Result<Vec<RealCalculusResult>> {
+                if ts == tempers.as_slice() {
+                    Ok(results.clone())
+                } else {
+                    Ok(run_real_tempered(data, &c.calculi, config, ts, progress)?)
+                }
+            };
+            let untempered = at(&vec![1.0; c.calculi.len()])?;
+            let chosen = at(&fitted)?;
+            Some(Tempering {
+                fits,
+                chosen,
+                untempered,
+            })
+        }
+        _ => None,
+    };
+    Ok(MainRun {
+        recording: rec.summary,
+        results,
+        tempering,
+        tempering_failed,
+        robots,
+    })
+}
