@@ -26,7 +26,6 @@ mod convert_cmd;
 mod demo_cmd;
 mod field_cmd;
 mod output;
-mod plot;
 mod pqrm_cmd;
 mod progress;
 mod qlink_cmd;

@@ -1,7 +1,7 @@
 //! Writing result files: whole or not at all.
 
 use std::io::Write;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result};
 
@@ -195,4 +195,13 @@ impl CsvTable {
     pub fn write(self, path: &Path) -> Result<()> {
         write_atomic(path, &self.into_bytes()?)
     }
+}
+
+/// Writes a picture as `stem.svg` and `stem.png`, each atomically.
+pub fn write_picture(stem: &Path, picture: &qrm_plot::Picture) -> Result<Vec<PathBuf>> {
+    let svg = stem.with_extension("svg");
+    let png = stem.with_extension("png");
+    write_atomic(&svg, picture.svg.as_bytes())?;
+    write_atomic(&png, &picture.png)?;
+    Ok(vec![svg, png])
 }

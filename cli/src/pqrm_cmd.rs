@@ -20,8 +20,7 @@ use crate::args::{
     CalibrateArgs, InputFormat, MapArgs, MapFormatArg, MergeArgs, NoiseMode, OrderingsArg, PqrmCmd,
     RealArgs, StudyArgs, TruthDataset,
 };
-use crate::output::{Staging, write_atomic};
-use crate::plot;
+use crate::output::{Staging, write_atomic, write_picture};
 
 /// Runs one `pqrm` subcommand.
 pub fn run(cmd: PqrmCmd) -> Result<()> {
@@ -447,15 +446,17 @@ fn calibrate(a: CalibrateArgs) -> Result<()> {
         serde_json::to_string_pretty(&summary)?.as_bytes(),
     )?;
     let edges: Vec<f64> = (0..=32).map(|i| -8.0 + 0.5 * f64::from(i)).collect();
-    plot::histogram(
+    write_picture(
         &out_dir.join("residuals"),
-        &format!(
-            "residual / fitted σ (N(0,1) if the model is right; {:.1} % beyond ±3)",
-            100.0 * z.iter().filter(|v| v.abs() > 3.0).count() as f64 / z.len().max(1) as f64
-        ),
-        "normalised residual of a pairwise distance (clamped to ±8)",
-        &edges,
-        &[("residuals".to_owned(), z)],
+        &qrm_plot::histogram(
+            &format!(
+                "residual / fitted σ (N(0,1) if the model is right; {:.1} % beyond ±3)",
+                100.0 * z.iter().filter(|v| v.abs() > 3.0).count() as f64 / z.len().max(1) as f64
+            ),
+            "normalised residual of a pairwise distance (clamped to ±8)",
+            &edges,
+            &[("residuals".to_owned(), z)],
+        )?,
     )?;
     // Committed before printing: a closed pipe must not lose the result.
     stage.commit()?;

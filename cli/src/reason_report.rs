@@ -14,9 +14,9 @@ use pqrm::reason_study::{
 };
 use serde_json::json;
 
-use crate::output::{CsvTable, Staging, write_atomic};
-use crate::plot::{self, Series};
+use crate::output::{CsvTable, Staging, write_atomic, write_picture};
 use crate::reason_cmd::ReasonStudyArgs;
+use qrm_plot::Series;
 
 pub fn study(a: &ReasonStudyArgs) -> Result<()> {
     let input = a
@@ -81,14 +81,16 @@ pub fn study(a: &ReasonStudyArgs) -> Result<()> {
                     .map(|q| (q.xy[0], q.xy[1], q.p_true))
                     .collect()
             };
-            figures.extend(plot::reference_pair(
+            figures.extend(write_picture(
                 &out_dir.join(format!("reference_pair_{}", r.calculus)),
-                &format!(
-                    "{}: landmarks in the frame of {}→{}",
-                    r.calculus, p.pair[0], p.pair[1]
-                ),
-                &pts(true),
-                &pts(false),
+                &qrm_plot::reference_pair(
+                    &format!(
+                        "{}: landmarks in the frame of {}→{}",
+                        r.calculus, p.pair[0], p.pair[1]
+                    ),
+                    &pts(true),
+                    &pts(false),
+                )?,
             )?);
         }
     }
@@ -182,12 +184,14 @@ fn reliability(out: &std::path::Path, r: &ReasonCalculusResult) -> Result<Vec<Pa
         "perfect calibration",
         vec![(0.0, 0.0), (1.0, 1.0)],
     ));
-    plot::line_chart(
+    write_picture(
         &out.join(format!("reliability_{}", r.calculus)),
-        &format!("{}: reliability of hidden-set predictions", r.calculus),
-        "mean P(most likely state) in bin",
-        "fraction right",
-        &series,
+        &qrm_plot::line_chart(
+            &format!("{}: reliability of hidden-set predictions", r.calculus),
+            "mean P(most likely state) in bin",
+            "fraction right",
+            &series,
+        )?,
     )
 }
 

@@ -11,8 +11,8 @@ use studies::serge::cross_validation::StudyConfig;
 use studies::serge::datasets::{DATASETS, DatasetName};
 use studies::serge::learned_calculus::compose_table_json;
 
-use crate::output::{Staging, write_atomic};
-use crate::plot::{RegionPicture, region_map};
+use crate::output::{Staging, write_atomic, write_picture};
+use qrm_plot::{RegionPicture, region_map};
 
 /// `qrm serge ...`.
 #[derive(Debug, clap::Subcommand)]
@@ -137,8 +137,7 @@ fn window4(v: &[f64]) -> Result<[f64; 4]> {
 }
 
 fn draw_map(stem: &Path, title: &str, map: &SalientRegionMap, points: &[[f64; 2]]) -> Result<()> {
-    region_map(
-        stem,
+    let picture = region_map(
         title,
         &RegionPicture {
             window: map.grid.window,
@@ -152,6 +151,7 @@ fn draw_map(stem: &Path, title: &str, map: &SalientRegionMap, points: &[[f64; 2]
             numbers: map.n_regions <= 60,
         },
     )?;
+    write_picture(stem, &picture)?;
     Ok(())
 }
 

@@ -6,10 +6,9 @@
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result, bail};
-use studies::{AnyStudy, Figure, Plot, Ran, Report};
+use studies::{AnyStudy, Ran, Report};
 
-use crate::output::{CsvTable, Staging, write_atomic};
-use crate::plot::{RegionPicture, Series, histogram, line_chart, region_map};
+use crate::output::{CsvTable, Staging, write_atomic, write_picture};
 
 /// `qrm study ...`.
 #[derive(Debug, clap::Subcommand)]
@@ -121,7 +120,7 @@ pub fn run(cmd: StudyCmd) -> Result<()> {
         }
         StudyCmd::Run(a) => {
             let (study, config) = config_of(&a.config)?;
-            run_and_write(study, &config, &a.out)
+            run_and_write(study, &config, &a.out, Shown::Tables)
         }
         StudyCmd::Shard(a) => shard(&a),
         StudyCmd::Aggregate(a) => aggregate(&a),
@@ -268,19 +267,42 @@ fn to_toml(v: &serde_json::Value) -> Result<String> {
     toml::to_string(&strip(v)).context("the config as TOML")
 }
 
+/// What a run prints on the terminal.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Shown {
+    /// The report's tables and claims (`qrm study run`).
+    Tables,
+    /// The report's set-up, a few lines telling the run (`qrm demo`).
+    Story,
+}
+
 /// Runs study `S` with a typed config (what an alias such as `qrm qlink field` builds from its
 /// flags) through the same runner as `qrm study run`; the config is checked before anything
 /// is created on disk.
 pub fn run_study<S: studies::Study>(config: &S::Config, out: &Path) -> Result<()> {
+    run_study_shown::<S>(config, out, Shown::Tables)
+}
+
+/// [`run_study`], printing what `shown` says.
+pub fn run_study_shown<S: studies::Study>(
+    config: &S::Config,
+    out: &Path,
+    shown: Shown,
+) -> Result<()> {
     let study = studies::find(S::NAME)?;
     let config = serde_json::to_value(config)?;
     study.check(&config)?;
-    run_and_write(study, &config, out)
+    run_and_write(study, &config, out, shown)
 }
 
 /// Runs `config` with a progress bar and writes everything into `out` (staged: nothing is
 /// left half-written on an error or Ctrl-C).
-pub fn run_and_write(study: &dyn AnyStudy, config: &serde_json::Value, out: &Path) -> Result<()> {
+pub fn run_and_write(
+    study: &dyn AnyStudy,
+    config: &serde_json::Value,
+    out: &Path,
+    shown: Shown,
+) -> Result<()> {
     let stage = Staging::new(out)?;
     let pb = crate::progress::Bar::new(0, study.name());
     let t0 = std::time::Instant::now();
@@ -288,13 +310,21 @@ pub fn run_and_write(study: &dyn AnyStudy, config: &serde_json::Value, out: &Pat
     let seconds = t0.elapsed().as_secs_f64();
     pb.finish_and_clear();
     write_run(stage.path(), &ran, Some(seconds))?;
-    outln!(
-        "{} in {seconds:.1} s on {} threads",
-        study.name(),
-        rayon::current_num_threads()
-    )?;
-    print_report(&ran.report)?;
-    outln!("wrote {}", out.display())?;
+    let threads = rayon::current_num_threads();
+    match shown {
+        Shown::Tables => {
+            outln!("{} in {seconds:.1} s on {threads} threads", study.name())?;
+            print_report(&ran.report)?;
+            outln!("wrote {}", out.display())?;
+        }
+        Shown::Story => {
+            outln!("{}", ran.report.setup.trim_end())?;
+            outln!(
+                "Wrote {} in {seconds:.1} s on {threads} threads.",
+                out.display()
+            )?;
+        }
+    }
     stage.commit()?;
     Ok(())
 }
@@ -321,10 +351,10 @@ pub fn write_run(dir: &Path, ran: &Ran, seconds: Option<f64>) -> Result<()> {
         csv.write(&place(&format!("{}.csv", t.name))?)?;
     }
     for f in &report.figures {
-        draw(&place(&f.name)?, f)?;
+        write_picture(&place(&f.name)?, &qrm_plot::figure(f)?)?;
     }
     for a in &report.attachments {
-        write_atomic(&place(&a.name)?, a.text.as_bytes())?;
+        write_atomic(&place(&a.name)?, a.bytes())?;
     }
     if let Some((name, text)) = &ran.output_file {
         write_atomic(&dir.join(name), text.as_bytes())?;
@@ -338,70 +368,6 @@ pub fn write_run(dir: &Path, ran: &Ran, seconds: Option<f64>) -> Result<()> {
     }
     write_atomic(&dir.join("report.md"), md.as_bytes())?;
     write_atomic(&dir.join("config.toml"), to_toml(&ran.config)?.as_bytes())?;
-    Ok(())
-}
-
-/// Draws a figure at `stem` (SVG and PNG).
-fn draw(stem: &Path, f: &Figure) -> Result<()> {
-    match &f.plot {
-        Plot::Histogram { edges, groups } => {
-            histogram(stem, &f.title, &f.x_label, edges, groups)?;
-        }
-        Plot::Lines { series } => {
-            let series: Vec<Series> = series
-                .iter()
-                .map(|l| {
-                    let s = if l.reference {
-                        Series::reference(l.name.clone(), l.points.clone())
-                    } else {
-                        Series::line(l.name.clone(), l.points.clone())
-                    };
-                    match &l.err {
-                        Some(e) => s.with_err(e.clone()),
-                        None => s,
-                    }
-                })
-                .collect();
-            line_chart(stem, &f.title, &f.x_label, &f.y_label, &series)?;
-        }
-        Plot::EdcScatter {
-            points,
-            colour_label,
-        } => {
-            crate::plot::edc_scatter(stem, &f.title, points, colour_label)?;
-        }
-        Plot::Heatmap { labels, matrix } => {
-            crate::plot::heatmap(stem, &f.title, labels, matrix)?;
-        }
-        Plot::Regions {
-            window,
-            nx,
-            ny,
-            cell_region,
-            points,
-            shade,
-            marks,
-            numbers,
-        } => {
-            let picture = RegionPicture {
-                window: *window,
-                nx: *nx,
-                ny: *ny,
-                cell_region,
-                points,
-                highlight: &[],
-                shade: shade.as_deref(),
-                marks,
-                numbers: *numbers,
-            };
-            region_map(stem, &f.title, &picture)?;
-        }
-        Plot::Site { world, drive, runs } => {
-            let runs: Vec<(Vec<(f64, f64)>, bool)> =
-                runs.iter().map(|r| (r.points.clone(), r.reached)).collect();
-            crate::plot::runs_map(stem, &f.title, world, drive, &runs)?;
-        }
-    }
     Ok(())
 }
 

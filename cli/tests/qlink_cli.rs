@@ -114,7 +114,9 @@ fn quick_study_writes_table_4_1() {
 fn the_demo_maps_learns_navigates_and_logs() {
     let out = Path::new(env!("CARGO_TARGET_TMPDIR")).join("demo");
     let _ = std::fs::remove_dir_all(&out);
+    let t0 = std::time::Instant::now();
     let stdout = common::ok(&["demo", "--out", out.to_str().unwrap()], "");
+    let seconds = t0.elapsed().as_secs_f64();
     assert!(stdout.contains("SERGE learned a"), "{stdout}");
     assert!(stdout.contains("reached"), "{stdout}");
     let summary: serde_json::Value =
@@ -136,14 +138,24 @@ fn the_demo_maps_learns_navigates_and_logs() {
     assert!(
         summary["trajectory_length"].as_f64().unwrap() <= summary["prop2_bound"].as_f64().unwrap()
     );
-    // the terminal summary is short and says where the files are
-    assert!(stdout.lines().count() <= 3, "{stdout}");
+    // the terminal story is short and says where the files are
+    assert!(stdout.lines().count() <= 4, "{stdout}");
     assert!(
         stdout.contains("demo.png") && stdout.contains("run.mcap"),
         "{stdout}"
     );
-    assert!(summary["seconds"]["total"].as_f64().unwrap() < 30.0);
-    for f in ["run.mcap", "demo.svg", "demo.png", "learned_calculus.json"] {
+    assert!(seconds < 60.0, "{seconds} s");
+    // issue 14: the demo is the `demo` study; the alias writes its report and config too
+    for f in [
+        "run.mcap",
+        "demo.svg",
+        "demo.png",
+        "learned_calculus.json",
+        "report.md",
+        "config.toml",
+        "run.csv",
+        "transitions.csv",
+    ] {
         assert!(out.join(f).is_file(), "{f}");
     }
     // the picture has a legend naming what it draws, and the learned calculus's panel

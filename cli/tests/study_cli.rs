@@ -92,7 +92,14 @@ fn list_config_and_refusals() {
     let names: Vec<&str> = list.lines().filter_map(|l| l.split(' ').next()).collect();
     assert_eq!(
         names,
-        ["monte-carlo", "serge-cv", "table-4-1", "field"],
+        [
+            "monte-carlo",
+            "real-data",
+            "serge-cv",
+            "table-4-1",
+            "field",
+            "demo"
+        ],
         "{list}"
     );
     let full = common::ok(
@@ -123,11 +130,28 @@ fn list_config_and_refusals() {
         assert!(err.contains(says), "{a:?}: {err}");
         assert!(!out.exists(), "nothing written for a refused config");
     }
+    // the demo is a study: its config is checked before anything is written
+    let o = common::qrm(
+        &[
+            "study",
+            "run",
+            "demo",
+            "--set",
+            "nav_range=-2",
+            "--out",
+            out.to_str().unwrap(),
+        ],
+        "",
+    );
+    assert_eq!(o.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("nav_range must be a positive"), "{err}");
+    assert!(!out.exists(), "nothing written for a refused config");
     let o = common::qrm(&["study", "run", "table-9-9", "--out", "x"], "");
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(
         err.contains("invalid value 'table-9-9'")
-            && err.contains("monte-carlo, serge-cv, table-4-1, field"),
+            && err.contains("monte-carlo, real-data, serge-cv, table-4-1, field, demo"),
         "{err}"
     );
 }

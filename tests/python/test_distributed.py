@@ -47,8 +47,12 @@ def real_config() -> dict:
     return cfg
 
 
+def demo_config() -> dict:
+    return qrm.studies.config("demo", seed=1)  # one shard: the pipeline is one run
+
+
 CASES = [("monte-carlo", mc_config), ("real-data", real_config), ("table-4-1", t41_config),
-         ("field", field_config), ("serge-cv", serge_config)]
+         ("field", field_config), ("serge-cv", serge_config), ("demo", demo_config)]
 QUICK = [("monte-carlo", 3), ("table-4-1", 1)]  # the quick configs, with their seeds
 
 

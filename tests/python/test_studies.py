@@ -146,3 +146,27 @@ def test_the_real_data_study_runs_from_python_as_on_the_command_line(mrclam_dir,
     ]
     with pytest.raises(qrm.InvalidInput, match="no such directory"):
         qrm.studies.run("real-data", dict(cfg, input=str(tmp_path / "nothing")))
+
+
+def test_the_demo_runs_from_python_with_the_files_of_qrm_demo(qrm_bin, tmp_path):
+    # issue 14 §2: the demo is a study; Python gets its log, summary and learned calculus as
+    # the CLI writes them, byte for byte
+    run = qrm.studies.run("demo", quick=True, seed=1)
+    conforms(run, qt.StudyRun)
+    files = {a["name"]: a for a in run["report"]["attachments"]}
+    log = files["run.mcap"]["data"]
+    assert isinstance(log, bytes) and log.startswith(b"\x89MCAP0\r\n")
+    assert files["summary.json"]["data"] is None
+    summary = json.loads(files["summary.json"]["text"])
+    assert summary["success"] is True and summary["plan_len"] >= 3
+    plot = next(f["plot"] for f in run["report"]["figures"] if f["name"] == "demo")
+    assert plot["kind"] == "navigation" and plot["regions"] is not None
+    assert len(plot["plan"]) == summary["plan_len"] + 1
+    out = tmp_path / "demo"
+    subprocess.run([qrm_bin, "demo", "--seed", "1", "--out", str(out)], check=True,
+                   capture_output=True)
+    assert (out / "run.mcap").read_bytes() == log
+    assert (out / "summary.json").read_text() == files["summary.json"]["text"]
+    assert (out / "learned_calculus.json").read_text() == files["learned_calculus.json"]["text"]
+    with pytest.raises(qrm.InvalidInput, match="nav_range"):
+        qrm.studies.run("demo", {"seed": 1, "nav_range": -1.0})

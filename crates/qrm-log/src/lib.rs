@@ -64,6 +64,7 @@ pub mod decode;
 mod error;
 mod kind;
 mod read;
+mod simulated;
 mod write;
 
 pub use convert::write_dataset;

@@ -16,7 +16,7 @@
 
 use std::collections::BTreeMap;
 use std::fs::File;
-use std::io::BufWriter;
+use std::io::{BufWriter, Cursor, Seek, Write};
 use std::path::Path;
 
 use crate::error::{LogError, Result};
@@ -101,9 +101,11 @@ pub fn yaw(theta: f64) -> Value {
     json!({"x": 0.0, "y": 0.0, "z": (theta / 2.0).sin(), "w": (theta / 2.0).cos()})
 }
 
-/// An MCAP file being written.
-pub struct McapLog {
-    writer: mcap::Writer<BufWriter<File>>,
+/// An MCAP log being written: to a file ([`McapLog::create`], the default sink) or to memory
+/// ([`McapLog::in_memory`], for a library that hands the bytes to a front end to save).
+pub struct McapLog<W: Write + Seek = BufWriter<File>> {
+    writer: mcap::Writer<W>,
+    /// The file, or what the bytes are, for error messages.
     path: std::path::PathBuf,
     channels: BTreeMap<String, u16>,
     sequence: u32,
@@ -119,11 +121,49 @@ impl McapLog {
             path: path.to_path_buf(),
             source,
         })?;
+        McapLog::on(BufWriter::new(file), path)
+    }
+
+    /// Creates a log at `path` with the channels of a simulated robot (`/scan`, `/world`,
+    /// `/tf`, `/log`, `/detections`). `lidar_range` (min, max, m) goes into the `/scan`
+    /// channel's metadata (`range_min`, `range_max`), so a reader knows which ranges mean
+    /// "no return".
+    ///
+    /// # Errors
+    /// As [`McapLog::create`].
+    pub fn robot(path: &Path, lidar_range: Option<(f64, f64)>) -> Result<Self> {
+        Self::create(path)?.with_robot_channels(lidar_range)
+    }
+}
+
+impl McapLog<Cursor<Vec<u8>>> {
+    /// Creates an empty log in memory; `name` stands for it in error messages. The same
+    /// messages give the same bytes as [`McapLog::create`] writes to a file.
+    ///
+    /// # Errors
+    /// [`LogError::Write`].
+    pub fn in_memory(name: &str) -> Result<Self> {
+        McapLog::on(Cursor::new(Vec::new()), Path::new(name))
+    }
+
+    /// Writes the summary and returns the log's bytes.
+    ///
+    /// # Errors
+    /// [`LogError::Write`].
+    pub fn into_bytes(mut self) -> Result<Vec<u8>> {
+        self.close()?;
+        Ok(self.writer.into_inner().into_inner())
+    }
+}
+
+impl<W: Write + Seek> McapLog<W> {
+    /// A log written to `sink` (uncompressed chunks of at most 256 KiB).
+    fn on(sink: W, path: &Path) -> Result<Self> {
         let writer = mcap::WriteOptions::new()
             .compression(None)
             .chunk_size(Some(256 * 1024))
             .profile("")
-            .create(BufWriter::new(file))
+            .create(sink)
             .map_err(|source| LogError::Write {
                 path: path.to_path_buf(),
                 source,
@@ -136,14 +176,12 @@ impl McapLog {
         })
     }
 
-    /// Creates a log with the channels of a simulated robot (`/scan`, `/world`, `/tf`, `/log`,
-    /// `/detections`). `lidar_range` (min, max, m) goes into the `/scan` channel's metadata
-    /// (`range_min`, `range_max`), so a reader knows which ranges mean "no return".
+    /// Adds the channels of a simulated robot (see [`McapLog::robot`]).
     ///
     /// # Errors
-    /// As [`McapLog::create`].
-    pub fn robot(path: &Path, lidar_range: Option<(f64, f64)>) -> Result<Self> {
-        let mut log = Self::create(path)?;
+    /// [`LogError::Write`].
+    pub fn with_robot_channels(self, lidar_range: Option<(f64, f64)>) -> Result<Self> {
+        let mut log = self;
         let mut scan_meta = BTreeMap::new();
         if let Some((lo, hi)) = lidar_range {
             scan_meta.insert("range_min".to_owned(), lo.to_string());
@@ -255,6 +293,10 @@ impl McapLog {
     /// # Errors
     /// [`LogError::Write`].
     pub fn finish(mut self) -> Result<()> {
+        self.close()
+    }
+
+    fn close(&mut self) -> Result<()> {
         self.writer.finish().map_err(|source| LogError::Write {
             path: self.path.clone(),
             source,

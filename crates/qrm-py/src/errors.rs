@@ -226,6 +226,7 @@ pub(crate) fn study_err(e: studies::StudyError) -> PyErr {
         studies::StudyError::Pqrm(inner) => pqrm(inner),
         studies::StudyError::Calculus(inner) => qsr(inner),
         studies::StudyError::Sim(inner) => sim_err(inner),
+        studies::StudyError::Log(inner) => log(inner),
         studies::StudyError::InvalidParameter(_) => InvalidInput::new_err(msg),
         _ => QrmError::new_err(msg),
     }

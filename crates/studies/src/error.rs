@@ -25,6 +25,9 @@ pub enum StudyError {
     /// An error from the simulator.
     #[error(transparent)]
     Sim(#[from] sim2d::SimError),
+    /// An error writing a log (the demo's MCAP).
+    #[error(transparent)]
+    Log(#[from] qrm_log::LogError),
 }
 
 impl StudyError {

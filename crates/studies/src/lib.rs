@@ -25,6 +25,7 @@
 //! | [`serge::cross_validation`] | §3.4.2, Fig 3.7 | SERGE cross-validation over μ and σ, fold by fold |
 //! | [`serge::examples`], [`serge::resolution_tree`], [`serge::learned_calculus`] | Figs 3.8–3.10, §3.3.2 | maps on all data, the lab's resolution-tree plan, the hallway's learned calculus and Algorithm 3 checked |
 //! | [`serge::study`] | §3.4 | all of it as one study (`serge-cv`), a shard per fold and dataset |
+//! | [`demo`] | DESIGN §1 | the whole pipeline: lidar mapping, PQRM, a learned calculus, Q-Link across the field site, an MCAP log |
 //!
 //! ## Naming rule
 //! A study's module is named after what the thesis calls it (`table_4_1`, `field`,
@@ -33,8 +34,9 @@
 //! ## Errors
 //! [`StudyError`]: `InvalidParameter` (a configuration refused before any work),
 //! `Cancelled`, and the wrapped errors of the crates a study drives (`Qlink`, `Serge`,
-//! `Pqrm`, `Calculus`, `Sim`).
+//! `Pqrm`, `Calculus`, `Sim`, `Log`).
 
+pub mod demo;
 mod error;
 pub mod pqrm;
 pub mod qlink;
@@ -49,6 +51,7 @@ pub mod world_perception;
 pub use error::{Result, StudyError};
 pub use registry::{STUDIES, find};
 pub use report::{
-    Attachment, Cell, Claim, Column, Figure, Line, Plot, Report, SiteRun, Table, Verdict,
+    Attachment, Cell, Claim, Column, Figure, Line, NavigationPicture, Plot, RegionsPanel, Report,
+    SiteRun, Table, Verdict,
 };
 pub use study::{AnyStudy, Ran, Study};

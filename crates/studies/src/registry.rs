@@ -11,6 +11,7 @@ pub static STUDIES: &[&dyn AnyStudy] = &[
     &Registered::<crate::serge::SergeStudy>::new(),
     &Registered::<crate::qlink::table_4_1::Table41>::new(),
     &Registered::<crate::qlink::field::FieldExperiment>::new(),
+    &Registered::<crate::demo::Demo>::new(),
 ];
 
 /// The study named `name`.

@@ -421,6 +421,52 @@ pub enum Plot {
         /// The runs.
         runs: Vec<SiteRun>,
     },
+    /// One navigation over a simulated site and, beside it, a calculus's regions (the demo's
+    /// picture); boxed, being far larger than the other kinds.
+    Navigation(Box<NavigationPicture>),
+}
+
+/// One navigation over a simulated site — the mapping drive, the plan's map elements as
+/// triangles of their landmarks, the links found, where the robot searched, start and goal —
+/// and beside it, optionally, a calculus's regions.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct NavigationPicture {
+    /// The site.
+    pub world: sim2d::WorldSpec,
+    /// The mapping drive (m).
+    pub drive: Vec<[f64; 2]>,
+    /// The navigation's positions (m).
+    pub trajectory: Vec<[f64; 2]>,
+    /// Index ranges `[from, to]` of `trajectory` spent searching (inclusive).
+    pub searches: Vec<[usize; 2]>,
+    /// The first plan's elements, each as its three landmarks' positions.
+    pub plan: Vec<[[f64; 2]; 3]>,
+    /// Positions of the links found.
+    pub links: Vec<[f64; 2]>,
+    /// Start position.
+    pub start: [f64; 2],
+    /// The goal landmark's position.
+    pub goal: [f64; 2],
+    /// A calculus's regions, drawn in a panel beside the site.
+    pub regions: Option<RegionsPanel>,
+}
+
+/// A calculus's regions on a grid over its normalised frame (A = (0, 0), B = (1, 0)), for a
+/// panel beside another picture.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct RegionsPanel {
+    /// The panel's title.
+    pub title: String,
+    /// `[x0, x1, y0, y1]`.
+    pub window: [f64; 4],
+    /// Cells along x.
+    pub nx: usize,
+    /// Cells along y.
+    pub ny: usize,
+    /// Region of every cell, row by row.
+    pub cell_region: Vec<u32>,
+    /// Labelled marks (the reference landmarks).
+    pub marks: Vec<([f64; 2], String)>,
 }
 
 /// A figure's data: a front end draws it.
@@ -438,14 +484,79 @@ pub struct Figure {
     pub plot: Plot,
 }
 
-/// A file a study produces beside its tables and figures (a learned calculus, a map), written
-/// as it is.
+/// A file a study produces beside its tables and figures (a learned calculus, a map, a log),
+/// written as it is.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Attachment {
     /// Path under the output directory (`hallway/calculus.json`).
     pub name: String,
-    /// Its text.
+    /// Its text (empty for a binary file).
     pub text: String,
+    /// A binary file's bytes (`None` for a text file): base64 text in JSON, so a report stays
+    /// one JSON document for Python and for shards sent across a cluster.
+    #[serde(default, with = "base64_bytes")]
+    pub data: Option<Vec<u8>>,
+}
+
+impl Attachment {
+    /// A text file.
+    #[must_use]
+    pub fn text(name: impl Into<String>, text: impl Into<String>) -> Self {
+        Self {
+            name: name.into(),
+            text: text.into(),
+            data: None,
+        }
+    }
+
+    /// A binary file.
+    #[must_use]
+    pub fn binary(name: impl Into<String>, data: Vec<u8>) -> Self {
+        Self {
+            name: name.into(),
+            text: String::new(),
+            data: Some(data),
+        }
+    }
+
+    /// What the file holds.
+    #[must_use]
+    pub fn bytes(&self) -> &[u8] {
+        self.data.as_deref().unwrap_or(self.text.as_bytes())
+    }
+}
+
+/// `Option<Vec<u8>>` as base64 text (standard alphabet, padded) or null.
+pub mod base64_bytes {
+    use base64::Engine as _;
+    use base64::engine::general_purpose::STANDARD;
+    use serde::{Deserialize, Deserializer, Serializer};
+
+    /// Serialises bytes as base64 text, `None` as null.
+    ///
+    /// # Errors
+    /// The serializer's.
+    #[allow(clippy::ref_option)] // the signature serde's `with` calls
+    pub fn serialize<S: Serializer>(v: &Option<Vec<u8>>, s: S) -> Result<S::Ok, S::Error> {
+        match v {
+            Some(b) => s.serialize_str(&STANDARD.encode(b)),
+            None => s.serialize_none(),
+        }
+    }
+
+    /// Reads base64 text or null.
+    ///
+    /// # Errors
+    /// Text that is not base64 (the decoder's reason).
+    pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<Option<Vec<u8>>, D::Error> {
+        Option::<String>::deserialize(d)?
+            .map(|t| {
+                STANDARD
+                    .decode(t.as_bytes())
+                    .map_err(|e| serde::de::Error::custom(format!("not base64: {e}")))
+            })
+            .transpose()
+    }
 }
 
 /// Everything a study says about one run.

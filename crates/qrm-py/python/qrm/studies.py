@@ -3,7 +3,7 @@ on the command line (the studies themselves are in the Rust `studies` crate).
 
     >>> import qrm
     >>> [name for name, _ in qrm.studies.available()]
-    ['monte-carlo', 'real-data', 'serge-cv', 'table-4-1', 'field']
+    ['monte-carlo', 'real-data', 'serge-cv', 'table-4-1', 'field', 'demo']
     >>> cfg = qrm.studies.config("table-4-1")          # the quick config, a dict to edit
     >>> cfg["pairs"] = 40
     >>> run = qrm.studies.run("table-4-1", cfg)        # doctest: +SKIP
@@ -12,11 +12,13 @@ on the command line (the studies themselves are in the Rust `studies` crate).
 A run returns `{"config", "output", "report"}`: the config it ran (every field filled in),
 the study's output (records and summaries) and its report — tables (each cell with its CSV
 field and its text), claims set beside the thesis's with computed verdicts, and the data of
-its figures.
+its figures, and the files it writes beside them (`attachments`: the demo's `summary.json`,
+learned calculus and `run.mcap` log, whose bytes are in `data`).
 """
 
 from __future__ import annotations
 
+import base64
 import json
 from typing import Any, Dict, List, Mapping, Optional, Tuple
 
@@ -73,6 +75,14 @@ def _as_run(text: str) -> types.StudyRun:
             plot["drive"] = [tuple(p) for p in plot["drive"]]
             for r in plot["runs"]:
                 r["points"] = [tuple(p) for p in r["points"]]
+        elif plot["kind"] == "navigation" and plot["regions"] is not None:
+            panel = plot["regions"]
+            panel["marks"] = [(list(at), label) for at, label in panel["marks"]]
+    # a binary file's bytes cross JSON as base64 text
+    for a in result["report"]["attachments"]:
+        data: Any = a["data"]
+        if data is not None:
+            a["data"] = base64.b64decode(data)
     return result
 
 

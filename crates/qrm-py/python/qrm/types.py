@@ -570,6 +570,36 @@ class SitePlot(TypedDict):
     runs: List[SiteRun]
 
 
+class RegionsPanel(TypedDict):
+    """A calculus's regions on a grid over its normalised frame (A = (0, 0), B = (1, 0)), row
+    by row, drawn beside another picture."""
+
+    title: str
+    window: List[float]
+    nx: int
+    ny: int
+    cell_region: List[int]
+    marks: List[Tuple[List[float], str]]
+
+
+class NavigationPlot(TypedDict):
+    """One navigation over a simulated site (the demo's picture): the mapping drive, the
+    trajectory with the index ranges `[from, to]` spent searching, the first plan's elements as
+    triangles of landmark positions, the links found, start and goal, and the learned
+    calculus's regions beside it."""
+
+    kind: Literal["navigation"]
+    world: Dict[str, Any]
+    drive: List[List[float]]
+    trajectory: List[List[float]]
+    searches: List[List[int]]
+    plan: List[List[List[float]]]
+    links: List[List[float]]
+    start: List[float]
+    goal: List[float]
+    regions: Optional[RegionsPanel]
+
+
 class ReportFigure(TypedDict):
     """A figure's data (the CLI draws it as SVG and PNG)."""
 
@@ -577,15 +607,19 @@ class ReportFigure(TypedDict):
     title: str
     x_label: str
     y_label: str
-    plot: Union[HistogramPlot, LinesPlot, EdcScatterPlot, HeatmapPlot, RegionsPlot, SitePlot]
+    plot: Union[
+        HistogramPlot, LinesPlot, EdcScatterPlot, HeatmapPlot, RegionsPlot, SitePlot, NavigationPlot
+    ]
 
 
 class ReportAttachment(TypedDict):
     """A file a study produces beside its tables and figures (`name` is its path under the
-    output directory)."""
+    output directory): a text file's `text`, or a binary file's `data` (the demo's `run.mcap`;
+    `None` for a text file)."""
 
     name: str
     text: str
+    data: Optional[bytes]
 
 
 class Report(TypedDict):

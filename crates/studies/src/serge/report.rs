@@ -633,20 +633,20 @@ fn attachments(output: &SergeOutput) -> Vec<Attachment> {
     for d in &output.datasets {
         let dir = d.dataset.as_str();
         for m in &d.examples.maps {
-            files.push(Attachment {
-                name: format!("{dir}/{}.json", m.stem),
-                text: m.map.to_string(),
-            });
+            files.push(Attachment::text(
+                format!("{dir}/{}.json", m.stem),
+                m.map.to_string(),
+            ));
         }
         if let Some(c) = &d.examples.learned_calculus {
-            files.push(Attachment {
-                name: format!("{dir}/calculus.json"),
-                text: c.spec.clone(),
-            });
-            files.push(Attachment {
-                name: format!("{dir}/compose_algorithm3.json"),
-                text: c.compose.to_string(),
-            });
+            files.push(Attachment::text(
+                format!("{dir}/calculus.json"),
+                c.spec.clone(),
+            ));
+            files.push(Attachment::text(
+                format!("{dir}/compose_algorithm3.json"),
+                c.compose.to_string(),
+            ));
         }
     }
     files

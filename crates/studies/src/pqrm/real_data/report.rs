@@ -44,10 +44,10 @@ pub fn report(_config: &RealDataConfig, out: &RealDataOutput) -> Report {
     if !m.robots.is_empty() {
         tables.push(many_robots_table(&m.robots));
         tables.push(robots_csv(&m.robots));
-        attachments.push(Attachment {
-            name: "robots.json".into(),
-            text: serde_json::to_string_pretty(&m.robots).unwrap_or_default(),
-        });
+        attachments.push(Attachment::text(
+            "robots.json",
+            serde_json::to_string_pretty(&m.robots).unwrap_or_default(),
+        ));
     }
     Report {
         title: format!(
@@ -332,10 +332,10 @@ fn real_json(out: &RealDataOutput) -> Attachment {
         "gated": r.gated,
         "skipped_measurements": r.skipped_measurements,
     });
-    Attachment {
-        name: "real.json".into(),
-        text: serde_json::to_string_pretty(&value).unwrap_or_default(),
-    }
+    Attachment::text(
+        "real.json",
+        serde_json::to_string_pretty(&value).unwrap_or_default(),
+    )
 }
 
 /// A count of the calculi for which `holds`, and whether it holds for all.
@@ -626,10 +626,10 @@ fn temper_json(t: &Tempering) -> Attachment {
             })
         })
         .collect();
-    Attachment {
-        name: "temper.json".into(),
-        text: serde_json::to_string_pretty(&rows).unwrap_or_default(),
-    }
+    Attachment::text(
+        "temper.json",
+        serde_json::to_string_pretty(&rows).unwrap_or_default(),
+    )
 }
 
 fn sensor_models_table(sweep: &[SensorVariant]) -> Table {

@@ -1,0 +1,99 @@
+//! A study's figure drawn by its kind: the one place that maps [`studies::Plot`] to a picture,
+//! so the command line and any other front end draw a report alike.
+
+use studies::{Figure, Plot};
+
+use crate::charts::{Series, edc_scatter, heatmap, histogram, line_chart};
+use crate::regions::{RegionPicture, region_map};
+use crate::sites::{DemoPicture, demo_picture, runs_map};
+use crate::{Picture, Result};
+
+/// Draws a study's figure by its kind.
+///
+/// # Errors
+/// [`crate::PlotError`] for data that cannot be drawn.
+pub fn figure(f: &Figure) -> Result<Picture> {
+    match &f.plot {
+        Plot::Histogram { edges, groups } => histogram(&f.title, &f.x_label, edges, groups),
+        Plot::Lines { series } => {
+            let series: Vec<Series> = series
+                .iter()
+                .map(|l| {
+                    let s = if l.reference {
+                        Series::reference(l.name.clone(), l.points.clone())
+                    } else {
+                        Series::line(l.name.clone(), l.points.clone())
+                    };
+                    match &l.err {
+                        Some(e) => s.with_err(e.clone()),
+                        None => s,
+                    }
+                })
+                .collect();
+            line_chart(&f.title, &f.x_label, &f.y_label, &series)
+        }
+        Plot::EdcScatter {
+            points,
+            colour_label,
+        } => edc_scatter(&f.title, points, colour_label),
+        Plot::Heatmap { labels, matrix } => heatmap(&f.title, labels, matrix),
+        Plot::Regions {
+            window,
+            nx,
+            ny,
+            cell_region,
+            points,
+            shade,
+            marks,
+            numbers,
+        } => {
+            let picture = RegionPicture {
+                window: *window,
+                nx: *nx,
+                ny: *ny,
+                cell_region,
+                points,
+                highlight: &[],
+                shade: shade.as_deref(),
+                marks,
+                numbers: *numbers,
+            };
+            region_map(&f.title, &picture)
+        }
+        Plot::Site { world, drive, runs } => {
+            let runs: Vec<(Vec<(f64, f64)>, bool)> =
+                runs.iter().map(|r| (r.points.clone(), r.reached)).collect();
+            runs_map(&f.title, world, drive, &runs)
+        }
+        Plot::Navigation(n) => {
+            let panel = n.regions.as_ref().map(|r| {
+                (
+                    r.title.clone(),
+                    RegionPicture {
+                        window: r.window,
+                        nx: r.nx,
+                        ny: r.ny,
+                        cell_region: &r.cell_region,
+                        points: &[],
+                        highlight: &[],
+                        shade: None,
+                        marks: &r.marks,
+                        numbers: true,
+                    },
+                )
+            });
+            demo_picture(&DemoPicture {
+                title: f.title.clone(),
+                world: &n.world,
+                drive: &n.drive,
+                trajectory: &n.trajectory,
+                searches: &n.searches,
+                plan: &n.plan,
+                links: &n.links,
+                start: n.start,
+                goal: n.goal,
+                regions: panel,
+            })
+        }
+    }
+}

@@ -1,0 +1,276 @@
+//! The demo's pipeline, step by step: the mapping drive by lidar, the PQRM, the calculus SERGE
+//! learns from it, the qualitative map of both and the thesis's navigator over it.
+
+use std::collections::{BTreeMap, BTreeSet};
+
+use pqrm::{LandmarkId, Observation, Pqrm, PqrmConfig, Scan};
+use qlink::{Controller, ControllerKind, Layer, LinkGraph, NavConfig, QualitativeMap, SearchPomdp};
+use qsr_core::Calculus;
+use qsr_core::progress::Progress;
+use serge::learn::{TripletObservation, triplet_beliefs};
+use serge::{CellMasses, Grid, Serge, SergeParams};
+
+use super::{DemoConfig, DemoOutput, Learned, choice, log, picture};
+use crate::error::{Result, StudyError};
+use crate::report::Attachment;
+use crate::world_perception::WorldPerception;
+
+/// Landmarks two map elements share for a link: 2, as in the thesis's field experiment
+/// (§4.4.2) — with one, elements spanning the site link far-apart places in one step.
+pub const BETA: usize = 2;
+
+/// Detection noise of the map, N(0, 0.7 m) per axis as in §4.4.2 (variance 0.49 m²).
+const DETECTION_VARIANCE: f64 = 0.49;
+
+/// Samples per landmark per step of the PQRM's sampler.
+const SAMPLES: usize = 300;
+
+/// The mapping drive: the field site, its frames with the detections renamed to the world's
+/// landmark ids (clutter recognised as a landmark dropped), and the scans that saw three.
+pub struct Mapping {
+    /// The simulated site.
+    pub scenario: sim2d::Scenario,
+    /// Every frame of the drive.
+    pub frames: Vec<sim2d::Frame>,
+    /// Landmarks recognised and matched to the world's.
+    pub recognised: usize,
+    /// The frames that saw three landmarks or more, as PQRM scans.
+    pub scans: Vec<Scan>,
+}
+
+/// Mean belief entropy after a scan (eq. 2.11): `(t, nats, landmark sets)`, for the log.
+pub type EntropyPoint = (f64, f64, usize);
+
+/// Runs the demo of `config`.
+///
+/// # Errors
+/// The crates' errors; [`StudyError::InvalidParameter`] when the seed's drive or the goal
+/// leaves nothing to navigate; [`StudyError::Cancelled`] when `progress` asks.
+pub fn run(config: &DemoConfig, progress: &dyn Progress) -> Result<DemoOutput> {
+    progress.add_total(3);
+    let mapping = map_by_lidar(config.seed)?;
+    let (flip, entropy) = flip_flop_map(&mapping.scans, config.seed)?;
+    progress.tick();
+    progress.check()?;
+    let learned = learn_calculus(&mapping.scans, config.seed)?;
+    let map = qualitative_map(flip, learned.as_ref(), &mapping.scans, config.seed)?;
+    progress.tick();
+    progress.check()?;
+    let (graph, nav_config) = navigator(&map, &mapping.scenario)?;
+    let perception = WorldPerception::new(&mapping.scenario.world, config.nav_range);
+    let setting = choice::Setting {
+        map: &map,
+        graph: &graph,
+        perception: &perception,
+        config: &nav_config,
+    };
+    let run = choice::choose_run(&setting, &mapping.frames, config.goal, progress)?;
+    progress.tick();
+    let log = log::write(&log::Run {
+        scenario: &mapping.scenario,
+        frames: &mapping.frames,
+        map: &map,
+        entropy: &entropy,
+        outcome: &run.outcome,
+        goal: run.goal,
+    })?;
+    let picture = picture::Picture::new(&mapping, &map, &perception, &run, learned.as_ref());
+    Ok(DemoOutput {
+        config: config.clone(),
+        frames: mapping.frames.len(),
+        recognised_landmarks: mapping.recognised,
+        map_elements: map.elements().len(),
+        link_graph_edges: graph.n_edges(),
+        learned: learned
+            .map(|c| {
+                Ok::<_, StudyError>(Learned {
+                    states: c.n_states(),
+                    spec: Attachment::text("learned_calculus.json", c.spec().to_json_string()?),
+                })
+            })
+            .transpose()?,
+        map_range: mapping.scenario.lidar.max_range,
+        run,
+        picture,
+        log: Attachment::binary("run.mcap", log),
+    })
+}
+
+/// The mapping drive with the lidar; landmarks recognised by triangles, no ids given. The
+/// recognised ids are matched to the world's (first recognition) so that the navigating
+/// robot can be simulated.
+///
+/// # Errors
+/// The simulator's; [`StudyError::InvalidParameter`] when no frame saw three landmarks.
+pub fn map_by_lidar(seed: u64) -> Result<Mapping> {
+    let scenario = sim2d::scenario("field", seed, None)?;
+    let mut frames = scenario.run(seed, true)?;
+    let assoc: BTreeMap<u32, u32> = sim2d::LidarDetector::new(0.3, 0.7)
+        .detect_frames(&mut frames)
+        .into_iter()
+        .map(|(id, i)| (id, scenario.world.spec().landmarks[i].id))
+        .collect();
+    for f in &mut frames {
+        f.detections.retain_mut(|d| match assoc.get(&d.id) {
+            Some(&world) => {
+                d.id = world;
+                true
+            }
+            None => false,
+        });
+    }
+    let scans: Vec<Scan> = frames
+        .iter()
+        .filter(|f| f.detections.len() >= 3)
+        .map(|f| {
+            let mut seen = BTreeSet::new();
+            let cov = [[DETECTION_VARIANCE, 0.0], [0.0, DETECTION_VARIANCE]];
+            let obs = f
+                .detections
+                .iter()
+                .filter(|d| seen.insert(d.id))
+                .map(|d| Observation::new(LandmarkId(d.id), d.xy, cov))
+                .collect::<std::result::Result<Vec<_>, _>>()?;
+            Ok(Scan::new(f.t, 0, obs)?)
+        })
+        .collect::<Result<_>>()?;
+    if scans.is_empty() {
+        return Err(StudyError::InvalidParameter(format!(
+            "seed {seed}: the mapping drive recognised no three landmarks at once"
+        )));
+    }
+    Ok(Mapping {
+        recognised: assoc.len(),
+        scenario,
+        frames,
+        scans,
+    })
+}
+
+fn pqrm_config(seed: u64) -> PqrmConfig {
+    PqrmConfig {
+        samples: SAMPLES,
+        seed,
+        ..PqrmConfig::default()
+    }
+}
+
+/// The PQRM of the flip-flop (left/right) calculus over the scans, and its mean entropy after
+/// each scan.
+///
+/// # Errors
+/// The mapper's.
+pub fn flip_flop_map(scans: &[Scan], seed: u64) -> Result<(Pqrm, Vec<EntropyPoint>)> {
+    let mut flip = Pqrm::new(Calculus::builtin("left-right")?, pqrm_config(seed))?;
+    let mut entropy = Vec::with_capacity(scans.len());
+    for s in scans {
+        flip.update(s)?;
+        if let Some(h) = flip.mean_entropy() {
+            entropy.push((s.t, h, flip.len()));
+        }
+    }
+    Ok((flip, entropy))
+}
+
+/// SERGE learns a calculus from the triplets the robot saw (`None` with fewer than two).
+///
+/// # Errors
+/// SERGE's.
+pub fn learn_calculus(scans: &[Scan], seed: u64) -> Result<Option<Calculus>> {
+    let mut count: BTreeMap<[u32; 3], usize> = BTreeMap::new();
+    for s in scans {
+        let ids: Vec<u32> = s.observations.iter().map(|o| o.id.0).collect();
+        for i in 0..ids.len() {
+            for j in i + 1..ids.len() {
+                for k in j + 1..ids.len() {
+                    *count.entry([ids[i], ids[j], ids[k]]).or_insert(0) += 1;
+                }
+            }
+        }
+    }
+    let mut triplets: Vec<[u32; 3]> = count
+        .into_iter()
+        .filter(|&(_, n)| n >= 4)
+        .map(|(t, _)| t)
+        .collect();
+    triplets.truncate(30);
+    if triplets.len() < 2 {
+        return Ok(None);
+    }
+    let mut obs = Vec::new();
+    for s in scans {
+        let get = |id: u32| s.observations.iter().find(|o| o.id.0 == id);
+        for (k, t) in triplets.iter().enumerate() {
+            if let (Some(d), Some(e), Some(f)) = (get(t[0]), get(t[1]), get(t[2])) {
+                obs.push(TripletObservation {
+                    triplet: k,
+                    points: [d.mean, e.mean, f.mean],
+                    cov: [d.cov, e.cov, f.cov],
+                });
+            }
+        }
+    }
+    let beliefs = triplet_beliefs(&obs, triplets.len(), 1000, seed)?;
+    let masses = CellMasses::compute(&beliefs, Grid::new([-3.0, 3.0, -2.5, 3.5], 48, 48)?)?;
+    let map = Serge::new(&masses)?.run(&SergeParams::new(6.min(triplets.len()), 2.0).seed(seed))?;
+    Ok(Some(map.to_calculus(
+        "demo-learned",
+        "learned by SERGE from the demo's mapping drive",
+    )?))
+}
+
+/// The hybrid map: the flip-flop layer, and the learned calculus's layer over the same scans.
+///
+/// # Errors
+/// The mapper's and Q-Link's.
+pub fn qualitative_map(
+    flip: Pqrm,
+    learned: Option<&Calculus>,
+    scans: &[Scan],
+    seed: u64,
+) -> Result<QualitativeMap> {
+    let mut layers = vec![Layer::Probabilistic(flip)];
+    if let Some(c) = learned {
+        let mut m = Pqrm::new(c.clone(), pqrm_config(seed))?;
+        for s in scans {
+            m.update(s)?;
+        }
+        layers.push(Layer::Probabilistic(m));
+    }
+    Ok(QualitativeMap::new(layers)?)
+}
+
+/// The Link Graph (β = 2, −log P costs from the horizon-4 POMDP) and the thesis's navigator:
+/// midpoint-and-sweep, arcs and circles of the lidar's range R, re-planning up to three times.
+///
+/// # Errors
+/// Q-Link's.
+pub fn navigator(
+    map: &QualitativeMap,
+    scenario: &sim2d::Scenario,
+) -> Result<(LinkGraph, NavConfig)> {
+    let pomdps: Vec<SearchPomdp> = map
+        .layers()
+        .iter()
+        .map(|l| {
+            SearchPomdp::builder(l.calculus())
+                .moves(qlink::Moves::Direct)
+                .p_move(0.9)
+                .build()
+        })
+        .collect::<std::result::Result<_, _>>()?;
+    let cost = qlink::graph::pomdp_cost(map, &pomdps, qlink::CostModel::NegLogSuccess);
+    let graph = LinkGraph::new(map, BETA, cost)?;
+    let map_range = scenario.lidar.max_range;
+    let config = NavConfig {
+        replan: true,
+        max_replans: 3,
+        map_range,
+        find_goal: true,
+        ..NavConfig::thesis(
+            Controller::new(ControllerKind::MidpointSweep, map_range),
+            pomdps[0].clone(),
+        )
+    };
+    Ok((graph, config))
+}
