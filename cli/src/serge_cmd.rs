@@ -13,6 +13,7 @@ use studies::serge::learned_calculus::compose_table_json;
 
 use crate::output::{Staging, write_atomic, write_picture};
 use qrm_plot::{RegionPicture, region_map};
+use serge::selection::{Sighting, TripletSelection};
 
 /// `qrm serge ...`.
 #[derive(Debug, clap::Subcommand)]
@@ -86,10 +87,11 @@ pub struct LearnArgs {
     /// Tolerance σ.
     #[arg(long, default_value_t = 2.0)]
     pub sigma: f64,
-    /// Use at most this many ordered triplets (drawn with the seed).
+    /// Use at most this many landmark triplets (drawn with the seed, each in a random
+    /// ordering: which landmark is located and which two make the frame).
     #[arg(long, default_value_t = 60)]
     pub max_triplets: usize,
-    /// A triplet needs this many frames with all three landmarks.
+    /// A landmark set needs this many frames with all three landmarks.
     #[arg(long, default_value_t = 5)]
     pub min_frames: usize,
     /// Samples per triplet belief.
@@ -230,53 +232,30 @@ fn learn(a: LearnArgs) -> Result<()> {
     let window = window4(&a.window)?;
     let grid = Grid::new(window, a.grid, a.grid)?;
     let scans = pqrm::loaders::read_csv(&a.input)?.scans;
-    // ordered triplets seen together in enough frames
-    let mut count: std::collections::BTreeMap<[u32; 3], usize> = Default::default();
-    for scan in &scans {
-        let ids: Vec<u32> = scan.observations.iter().map(|o| o.id.0).collect();
-        for &d in &ids {
-            for &e in &ids {
-                for &f in &ids {
-                    if d != e && e != f && d != f {
-                        *count.entry([d, e, f]).or_insert(0) += 1;
-                    }
-                }
-            }
-        }
-    }
-    let mut triplets: Vec<[u32; 3]> = count
-        .into_iter()
-        .filter(|&(_, n)| n >= a.min_frames)
-        .map(|(t, _)| t)
+    // landmark sets seen together in enough frames, drawn with the seed, each in a random
+    // ordering (serge::selection's rule, as the SERGE study and the demo)
+    let frames: Vec<Vec<Sighting>> = scans
+        .iter()
+        .map(|s| {
+            s.observations
+                .iter()
+                .map(|o| Sighting {
+                    id: o.id.0,
+                    xy: o.mean,
+                    cov: o.cov,
+                })
+                .collect()
+        })
         .collect();
-    if triplets.is_empty() {
-        bail!(
-            "no triplet of landmarks is seen together in {} frames of {}",
-            a.min_frames,
-            a.input.display()
-        );
-    }
-    {
-        use rand::SeedableRng;
-        use rand::seq::SliceRandom;
-        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(a.seed);
-        triplets.shuffle(&mut rng);
-    }
-    triplets.truncate(a.max_triplets);
-    triplets.sort_unstable();
-    let mut obs = Vec::new();
-    for scan in &scans {
-        let get = |id: u32| scan.observations.iter().find(|o| o.id.0 == id);
-        for (k, t) in triplets.iter().enumerate() {
-            if let (Some(d), Some(e), Some(f)) = (get(t[0]), get(t[1]), get(t[2])) {
-                obs.push(serge::learn::TripletObservation {
-                    triplet: k,
-                    points: [d.mean, e.mean, f.mean],
-                    cov: [d.cov, e.cov, f.cov],
-                });
-            }
-        }
-    }
+    let selection = TripletSelection {
+        min_frames: a.min_frames,
+        max_triplets: a.max_triplets,
+        seed: a.seed,
+    };
+    let selected = selection
+        .select(&frames)
+        .with_context(|| format!("learning from {}", a.input.display()))?;
+    let (triplets, obs) = (selected.triplets, selected.observations);
     let beliefs = serge::learn::triplet_beliefs(&obs, triplets.len(), a.samples, a.seed)?;
     let masses = CellMasses::compute(&beliefs, grid)?;
     let mut params = SergeParams::new(a.mu.min(triplets.len()), a.sigma).seed(a.seed);

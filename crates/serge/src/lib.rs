@@ -58,6 +58,7 @@ mod grid;
 mod init;
 pub mod learn;
 mod map;
+pub mod selection;
 #[allow(clippy::module_inception)]
 mod serge;
 mod tree;

@@ -7,7 +7,8 @@ use pqrm::{LandmarkId, Observation, Pqrm, PqrmConfig, Scan};
 use qlink::{Controller, ControllerKind, Layer, LinkGraph, NavConfig, QualitativeMap, SearchPomdp};
 use qsr_core::Calculus;
 use qsr_core::progress::Progress;
-use serge::learn::{TripletObservation, triplet_beliefs};
+use serge::learn::triplet_beliefs;
+use serge::selection::{Sighting, TripletSelection};
 use serge::{CellMasses, Grid, Serge, SergeParams};
 
 use super::{DemoConfig, DemoOutput, Learned, choice, log, picture};
@@ -172,47 +173,46 @@ pub fn flip_flop_map(scans: &[Scan], seed: u64) -> Result<(Pqrm, Vec<EntropyPoin
     Ok((flip, entropy))
 }
 
-/// SERGE learns a calculus from the triplets the robot saw (`None` with fewer than two).
+/// Frames a landmark set must be seen together in to be learned from.
+const LEARN_MIN_FRAMES: usize = 4;
+
+/// Most triplets the demo learns from.
+const LEARN_TRIPLETS: usize = 30;
+
+/// SERGE learns a calculus from the triplets the robot saw ([`serge::selection`]'s rule;
+/// `None` with fewer than two).
 ///
 /// # Errors
 /// SERGE's.
 pub fn learn_calculus(scans: &[Scan], seed: u64) -> Result<Option<Calculus>> {
-    let mut count: BTreeMap<[u32; 3], usize> = BTreeMap::new();
-    for s in scans {
-        let ids: Vec<u32> = s.observations.iter().map(|o| o.id.0).collect();
-        for i in 0..ids.len() {
-            for j in i + 1..ids.len() {
-                for k in j + 1..ids.len() {
-                    *count.entry([ids[i], ids[j], ids[k]]).or_insert(0) += 1;
-                }
-            }
-        }
-    }
-    let mut triplets: Vec<[u32; 3]> = count
-        .into_iter()
-        .filter(|&(_, n)| n >= 4)
-        .map(|(t, _)| t)
+    let frames: Vec<Vec<Sighting>> = scans
+        .iter()
+        .map(|s| {
+            s.observations
+                .iter()
+                .map(|o| Sighting {
+                    id: o.id.0,
+                    xy: o.mean,
+                    cov: o.cov,
+                })
+                .collect()
+        })
         .collect();
-    triplets.truncate(30);
-    if triplets.len() < 2 {
+    let selection = TripletSelection {
+        min_frames: LEARN_MIN_FRAMES,
+        max_triplets: LEARN_TRIPLETS,
+        seed,
+    };
+    let Ok(selected) = selection.select(&frames) else {
+        return Ok(None);
+    };
+    let n = selected.triplets.len();
+    if n < 2 {
         return Ok(None);
     }
-    let mut obs = Vec::new();
-    for s in scans {
-        let get = |id: u32| s.observations.iter().find(|o| o.id.0 == id);
-        for (k, t) in triplets.iter().enumerate() {
-            if let (Some(d), Some(e), Some(f)) = (get(t[0]), get(t[1]), get(t[2])) {
-                obs.push(TripletObservation {
-                    triplet: k,
-                    points: [d.mean, e.mean, f.mean],
-                    cov: [d.cov, e.cov, f.cov],
-                });
-            }
-        }
-    }
-    let beliefs = triplet_beliefs(&obs, triplets.len(), 1000, seed)?;
+    let beliefs = triplet_beliefs(&selected.observations, n, 1000, seed)?;
     let masses = CellMasses::compute(&beliefs, Grid::new([-3.0, 3.0, -2.5, 3.5], 48, 48)?)?;
-    let map = Serge::new(&masses)?.run(&SergeParams::new(6.min(triplets.len()), 2.0).seed(seed))?;
+    let map = Serge::new(&masses)?.run(&SergeParams::new(6.min(n), 2.0).seed(seed))?;
     Ok(Some(map.to_calculus(
         "demo-learned",
         "learned by SERGE from the demo's mapping drive",

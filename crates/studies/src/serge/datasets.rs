@@ -24,6 +24,7 @@ use rand_distr::{Distribution, StandardNormal};
 use serde::{Deserialize, Serialize};
 
 use serge::learn::{TripletObservation, normalise, triplet_beliefs};
+use serge::selection::{Sighting, TripletSelection};
 use serge::{Belief, BeliefSet};
 
 use crate::error::{Result, StudyError};
@@ -272,67 +273,52 @@ fn lab(seed: u64) -> Dataset {
     }
 }
 
+/// Frames the hallway's landmark sets must be seen together in.
+const HALLWAY_MIN_FRAMES: usize = 10;
+
+/// Triplets of the hallway dataset (§3.4: 22).
+const HALLWAY_TRIPLETS: usize = 22;
+
 fn hallway(seed: u64, samples: usize) -> Result<Dataset> {
     let sim_err =
         |e: sim2d::SimError| StudyError::InvalidParameter(format!("hallway simulation: {e}"));
     let scenario = sim2d::scenario("hallway", seed, None).map_err(sim_err)?;
     let frames = scenario.run(seed, false).map_err(sim_err)?;
-    // triplets (unordered) seen together in ≥ 10 frames
-    let mut seen: std::collections::BTreeMap<[u32; 3], usize> = Default::default();
-    for f in &frames {
-        let ids: Vec<u32> = f.detections.iter().map(|d| d.id).collect();
-        for a in 0..ids.len() {
-            for b in a + 1..ids.len() {
-                for c in b + 1..ids.len() {
-                    *seen.entry([ids[a], ids[b], ids[c]]).or_insert(0) += 1;
-                }
-            }
-        }
-    }
-    let candidates: Vec<[u32; 3]> = seen
-        .into_iter()
-        .filter(|&(_, n)| n >= 10)
-        .map(|(t, _)| t)
+    // 22 landmark sets seen together in ≥ 10 frames, each in a random ordering
+    let frames: Vec<Vec<Sighting>> = frames
+        .iter()
+        .map(|f| {
+            f.detections
+                .iter()
+                .map(|d| Sighting {
+                    id: d.id,
+                    xy: d.xy,
+                    cov: d.cov,
+                })
+                .collect()
+        })
         .collect();
-    if candidates.len() < 22 {
+    let selection = TripletSelection {
+        min_frames: HALLWAY_MIN_FRAMES,
+        max_triplets: HALLWAY_TRIPLETS,
+        seed: seed ^ 0x4a11,
+    };
+    let selected = selection
+        .select(&frames)
+        .map_err(|e| StudyError::InvalidParameter(format!("hallway: {e}")))?;
+    if selected.triplets.len() < HALLWAY_TRIPLETS {
         return Err(StudyError::InvalidParameter(format!(
-            "the hallway run saw only {} triplets in ≥ 10 frames",
-            candidates.len()
+            "the hallway run saw only {} triplets in ≥ {HALLWAY_MIN_FRAMES} frames",
+            selected.candidates
         )));
     }
-    let mut rng = ChaCha8Rng::seed_from_u64(seed ^ 0x4a11);
-    let mut chosen: Vec<[u32; 3]> = Vec::new();
-    while chosen.len() < 22 {
-        let mut t = candidates[rng.random_range(0..candidates.len())];
-        if chosen.iter().any(|c| {
-            let (mut a, mut b) = (*c, t);
-            a.sort_unstable();
-            b.sort_unstable();
-            a == b
-        }) {
-            continue;
-        }
-        // a random ordering: which landmark is located (F) and which are the frame (D, E)
-        for i in (1..3).rev() {
-            t.swap(i, rng.random_range(0..=i));
-        }
-        chosen.push(t);
-    }
+    let chosen = &selected.triplets;
     let mut observations: Vec<Vec<TripletObservation>> = vec![Vec::new(); chosen.len()];
     let mut points: Vec<Vec<[f64; 2]>> = vec![Vec::new(); chosen.len()];
-    for f in &frames {
-        for (k, t) in chosen.iter().enumerate() {
-            let get = |id: u32| f.detections.iter().find(|d| d.id == id);
-            if let (Some(d), Some(e), Some(g)) = (get(t[0]), get(t[1]), get(t[2]))
-                && let Some(p) = normalise(d.xy, e.xy, g.xy)
-            {
-                observations[k].push(TripletObservation {
-                    triplet: k,
-                    points: [d.xy, e.xy, g.xy],
-                    cov: [d.cov, e.cov, g.cov],
-                });
-                points[k].push(p);
-            }
+    for o in selected.observations {
+        if let Some(p) = normalise(o.points[0], o.points[1], o.points[2]) {
+            points[o.triplet].push(p);
+            observations[o.triplet].push(o);
         }
     }
     let truth = scenario
