@@ -72,6 +72,17 @@ impl InputFormat {
     }
 }
 
+impl From<InputFormat> for studies::recording::RecordingFormat {
+    fn from(f: InputFormat) -> Self {
+        match f {
+            InputFormat::Csv => Self::Csv,
+            InputFormat::Mrclam => Self::Mrclam,
+            InputFormat::G2o => Self::G2o,
+            InputFormat::Mcap => Self::Mcap,
+        }
+    }
+}
+
 /// Where the range-bearing noise comes from (`--noise`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
 pub enum NoiseMode {

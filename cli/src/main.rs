@@ -30,7 +30,6 @@ mod pqrm_cmd;
 mod progress;
 mod qlink_cmd;
 mod reason_cmd;
-mod reason_report;
 mod serge_cmd;
 mod sim_cmd;
 mod study_cmd;

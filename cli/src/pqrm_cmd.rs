@@ -6,7 +6,7 @@ use std::path::Path;
 use std::time::Instant;
 
 use anyhow::{Context, Result, bail, ensure};
-use pqrm::loaders::{Dataset, RangeBearingNoise, read_csv, read_g2o, read_mrclam, read_truth_csv};
+use pqrm::loaders::{Dataset, RangeBearingNoise, read_mrclam, read_truth_csv};
 use pqrm::study::ObservationQuery;
 use pqrm::temper::TemperChoice;
 use pqrm::{Orderings, Pqrm, PqrmConfig, evaluate};
@@ -67,24 +67,13 @@ fn prob(calculus: &str, samples: usize, seed: u64, floor: f64) -> Result<()> {
     Ok(())
 }
 
+/// Reads a recording (`studies::recording`).
 pub(crate) fn load_dataset(
     format: InputFormat,
     input: &Path,
     noise: RangeBearingNoise,
 ) -> Result<Dataset> {
-    ensure!(
-        noise.sigma_range.is_finite()
-            && noise.sigma_range >= 0.0
-            && noise.sigma_bearing.is_finite()
-            && noise.sigma_bearing >= 0.0,
-        "noise standard deviations must be finite and >= 0"
-    );
-    Ok(match format {
-        InputFormat::Csv => read_csv(input)?,
-        InputFormat::Mrclam => read_mrclam(input, noise)?,
-        InputFormat::G2o => read_g2o(input)?,
-        InputFormat::Mcap => qrm_log::read_mcap(input, &qrm_log::ReadOptions::default())?.dataset,
-    })
+    Ok(studies::recording::read(format.into(), input, noise)?)
 }
 
 /// The range-bearing noise to load `input` with: `mode` `fixed` (the given sigmas, else
@@ -146,6 +135,15 @@ pub(crate) fn resolve_noise(
     }
 }
 
+/// What `qrm map` read: the recording, the noise fit, the gated outliers, what the log reader
+/// did.
+struct MapInput {
+    data: Dataset,
+    noise_fit: Option<pqrm::calibrate::NoiseFit>,
+    gated: Option<pqrm::calibrate::Gated>,
+    log_read: Option<qrm_log::Recording>,
+}
+
 /// `qrm map`.
 pub fn map(a: MapArgs) -> Result<()> {
     let calc = Calculus::resolve(&a.calculus)
@@ -161,12 +159,63 @@ pub fn map(a: MapArgs) -> Result<()> {
     };
     config.validate()?;
     let temper = TemperChoice::parse(&a.temper).context("--temper")?;
+    let read = read_for_map(&a)?;
+    let data = &read.data;
+    // One choice for the whole recording, so that per-robot maps can be merged.
+    let possible = crate::args::possible_ordered_sets(&data.scans);
+    config.orderings = a.orderings.resolve(possible);
+    if a.orderings == OrderingsArg::Auto && config.orderings == Orderings::Canonical {
+        eprintln!(
+            "note: the recording could give {possible} ordered landmark sets (more than {}); \
+             recording one ordering per unordered set, the other five derived on reading \
+             (--orderings all to record all six)",
+            OrderingsArg::AUTO_CANONICAL_ABOVE
+        );
+    }
+    let extra = read_summary(&read);
+    // Written into a staging directory, moved into place only when all is done: a
+    // failure or Ctrl-C leaves nothing a user could take for a result.
+    let stage = Staging::new(&a.out)?;
+    let out_dir = stage.path().to_path_buf();
+    let settings = (config, temper, a.map_format);
+    let summary = if a.per_robot {
+        let robots: std::collections::BTreeSet<u32> = data.scans.iter().map(|s| s.robot).collect();
+        let mut all = serde_json::Map::new();
+        for r in robots {
+            let dir = out_dir.join(format!("robot{r}"));
+            std::fs::create_dir_all(&dir).with_context(|| format!("creating {}", dir.display()))?;
+            let one = Dataset {
+                scans: data
+                    .scans
+                    .iter()
+                    .filter(|s| s.robot == r)
+                    .cloned()
+                    .collect(),
+                truth: data.truth.clone(),
+                skipped: 0,
+            };
+            let label = format!("mapping robot {r}");
+            let s = map_into(&dir, &one, &calc, settings, &extra, &label)?;
+            all.insert(format!("robot{r}"), s);
+        }
+        serde_json::Value::Object(all)
+    } else {
+        map_into(&out_dir, data, &calc, settings, &extra, "mapping")?
+    };
+    // Committed before printing: a closed pipe must not lose the result.
+    stage.commit()?;
+    outln!("{}", serde_json::to_string_pretty(&summary)?)?;
+    Ok(())
+}
+
+/// The recording `qrm map` maps: read in its form (the loaders' errors name the file and
+/// line, or topic, message and field), with its truth, gated, restricted to `--robots`.
+fn read_for_map(a: &MapArgs) -> Result<MapInput> {
     let (noise, noise_fit) = if a.format == InputFormat::Mcap {
         (RangeBearingNoise::MRCLAM, None)
     } else {
         resolve_noise(a.format, &a.input, &a.noise)?
     };
-    // The loaders' errors name the file and line (or topic, message and field) themselves.
     let mut log_read = None;
     let mut data = if a.format == InputFormat::Mcap {
         let mut options = qrm_log::ReadOptions {
@@ -216,26 +265,25 @@ pub fn map(a: MapArgs) -> Result<()> {
         }
         data.scans.retain(|s| a.robots.contains(&s.robot));
     }
-    // One choice for the whole recording, so that per-robot maps can be merged.
-    let possible = crate::args::possible_ordered_sets(&data.scans);
-    config.orderings = a.orderings.resolve(possible);
-    if a.orderings == OrderingsArg::Auto && config.orderings == Orderings::Canonical {
-        eprintln!(
-            "note: the recording could give {possible} ordered landmark sets (more than {}); \
-             recording one ordering per unordered set, the other five derived on reading \
-             (--orderings all to record all six)",
-            OrderingsArg::AUTO_CANONICAL_ABOVE
-        );
-    }
-    // What the log reader did goes into every summary.
+    Ok(MapInput {
+        data,
+        noise_fit,
+        gated,
+        log_read,
+    })
+}
+
+/// What the reading did, for every summary: the noise fit, the outliers gated, the log's
+/// topics and where its landmarks came from.
+fn read_summary(read: &MapInput) -> serde_json::Map<String, serde_json::Value> {
     let mut extra = serde_json::Map::new();
-    if let Some(fit) = &noise_fit {
+    if let Some(fit) = &read.noise_fit {
         extra.insert("noise_fit".into(), json!(fit));
     }
-    if let Some(g) = &gated {
+    if let Some(g) = &read.gated {
         extra.insert("gated".into(), json!(g));
     }
-    if let Some(r) = &log_read {
+    if let Some(r) = &read.log_read {
         let used: Vec<_> = r
             .topics
             .iter()
@@ -253,51 +301,7 @@ pub fn map(a: MapArgs) -> Result<()> {
         );
         extra.insert("damage".into(), json!(r.damage));
     }
-    // Written into a staging directory, moved into place only when all is done: a
-    // failure or Ctrl-C leaves nothing a user could take for a result.
-    let stage = Staging::new(&a.out)?;
-    let out_dir = stage.path().to_path_buf();
-    let summary = if a.per_robot {
-        let robots: std::collections::BTreeSet<u32> = data.scans.iter().map(|s| s.robot).collect();
-        let mut all = serde_json::Map::new();
-        for r in robots {
-            let dir = out_dir.join(format!("robot{r}"));
-            std::fs::create_dir_all(&dir).with_context(|| format!("creating {}", dir.display()))?;
-            let one = Dataset {
-                scans: data
-                    .scans
-                    .iter()
-                    .filter(|s| s.robot == r)
-                    .cloned()
-                    .collect(),
-                truth: data.truth.clone(),
-                skipped: 0,
-            };
-            let s = map_into(
-                &dir,
-                &one,
-                &calc,
-                (config, temper, a.map_format),
-                &extra,
-                &format!("mapping robot {r}"),
-            )?;
-            all.insert(format!("robot{r}"), s);
-        }
-        serde_json::Value::Object(all)
-    } else {
-        map_into(
-            &out_dir,
-            &data,
-            &calc,
-            (config, temper, a.map_format),
-            &extra,
-            "mapping",
-        )?
-    };
-    // Committed before printing: a closed pipe must not lose the result.
-    stage.commit()?;
-    outln!("{}", serde_json::to_string_pretty(&summary)?)?;
-    Ok(())
+    extra
 }
 
 /// The config to map `data` with: a fixed τ as given, or `auto` chosen from the data

@@ -327,7 +327,7 @@ pub fn run(cmd: ReasonCmd) -> Result<()> {
         ReasonCmd::Export(args) => export(&args),
         ReasonCmd::Check(args) => check(&args),
         ReasonCmd::Infer(args) => infer(&args),
-        ReasonCmd::Study(args) => crate::reason_report::study(&args),
+        ReasonCmd::Study(args) => study(&args),
     }
 }
 
@@ -455,4 +455,25 @@ fn infer(args: &InferArgs) -> Result<()> {
         args.out.display()
     )?;
     Ok(())
+}
+
+/// `qrm reason study`: an alias of `qrm study run reason` (the study's config from the flags).
+fn study(a: &ReasonStudyArgs) -> Result<()> {
+    use studies::Study;
+    use studies::pqrm::reasoning::{ReasonConfig, ReasonStudy};
+    let mut config: ReasonConfig = if a.quick {
+        ReasonStudy::quick(a.seed)
+    } else {
+        ReasonStudy::full(a.seed)
+    };
+    if let Some(input) = &a.input {
+        config.input.clone_from(input);
+    }
+    config.format = a.format.into();
+    config.truth.clone_from(&a.truth);
+    config.max_frames = a.max_frames;
+    if let Some(c) = &a.calculi {
+        config.study.calculi.clone_from(c);
+    }
+    crate::study_cmd::run_study::<ReasonStudy>(&config, &a.out)
 }

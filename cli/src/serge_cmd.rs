@@ -13,7 +13,7 @@ use studies::serge::learned_calculus::compose_table_json;
 
 use crate::output::{Staging, write_atomic, write_picture};
 use qrm_plot::{RegionPicture, region_map};
-use serge::selection::{Sighting, TripletSelection};
+use serge::selection::TripletSelection;
 
 /// `qrm serge ...`.
 #[derive(Debug, clap::Subcommand)]
@@ -234,19 +234,7 @@ fn learn(a: LearnArgs) -> Result<()> {
     let scans = pqrm::loaders::read_csv(&a.input)?.scans;
     // landmark sets seen together in enough frames, drawn with the seed, each in a random
     // ordering (serge::selection's rule, as the SERGE study and the demo)
-    let frames: Vec<Vec<Sighting>> = scans
-        .iter()
-        .map(|s| {
-            s.observations
-                .iter()
-                .map(|o| Sighting {
-                    id: o.id.0,
-                    xy: o.mean,
-                    cov: o.cov,
-                })
-                .collect()
-        })
-        .collect();
+    let frames = studies::recording::sightings(&scans);
     let selection = TripletSelection {
         min_frames: a.min_frames,
         max_triplets: a.max_triplets,
@@ -278,35 +266,7 @@ fn learn(a: LearnArgs) -> Result<()> {
     // Written into a staging directory, moved into place only when all is done: a
     // failure or Ctrl-C leaves nothing a user could take for a result.
     let stage = Staging::new(&a.out)?;
-    let out_dir = stage.path().to_path_buf();
-    write_atomic(
-        &out_dir.join("calculus.json"),
-        calc.spec().to_json_string()?.as_bytes(),
-    )?;
-    let rows = compose_table_json(&calc, &table);
-    write_atomic(
-        &out_dir.join("compose.json"),
-        serde_json::to_string(
-            &json!({"states": calc.labels(), "table": rows, "method": "algorithm-3-intervals"}),
-        )?
-        .as_bytes(),
-    )?;
-    let mut doc = map.to_json();
-    doc["triplets"] = json!(triplets);
-    write_atomic(
-        &out_dir.join("map.json"),
-        serde_json::to_string(&doc)?.as_bytes(),
-    )?;
-    let points: Vec<[f64; 2]> = obs
-        .iter()
-        .filter_map(|o| serge::learn::normalise(o.points[0], o.points[1], o.points[2]))
-        .collect();
-    draw_map(
-        &out_dir.join("calculus"),
-        &format!("learned calculus `{}`: {} states", a.name, calc.n_states()),
-        &map,
-        &points,
-    )?;
+    write_learned(stage.path(), &a.name, &calc, &table, &map, &triplets, &obs)?;
     outln!(
         "{} triplets, {} observations → `{}` with {} states, compose {} entries, in {:.1} s; wrote {}",
         triplets.len(),
@@ -318,5 +278,47 @@ fn learn(a: LearnArgs) -> Result<()> {
         a.out.display()
     )?;
     stage.commit()?;
+    Ok(())
+}
+
+/// The learned calculus's files in `dir`: its spec, Algorithm 3's compose table, the SR map
+/// with the triplets it came from, and its picture over the data.
+fn write_learned(
+    dir: &Path,
+    name: &str,
+    calc: &qsr_core::Calculus,
+    table: &qsr_core::ComposeTable,
+    map: &SalientRegionMap,
+    triplets: &[[u32; 3]],
+    obs: &[serge::learn::TripletObservation],
+) -> Result<()> {
+    write_atomic(
+        &dir.join("calculus.json"),
+        calc.spec().to_json_string()?.as_bytes(),
+    )?;
+    let rows = compose_table_json(calc, table);
+    write_atomic(
+        &dir.join("compose.json"),
+        serde_json::to_string(
+            &json!({"states": calc.labels(), "table": rows, "method": "algorithm-3-intervals"}),
+        )?
+        .as_bytes(),
+    )?;
+    let mut doc = map.to_json();
+    doc["triplets"] = json!(triplets);
+    write_atomic(
+        &dir.join("map.json"),
+        serde_json::to_string(&doc)?.as_bytes(),
+    )?;
+    let points: Vec<[f64; 2]> = obs
+        .iter()
+        .filter_map(|o| serge::learn::normalise(o.points[0], o.points[1], o.points[2]))
+        .collect();
+    draw_map(
+        &dir.join("calculus"),
+        &format!("learned calculus `{name}`: {} states", calc.n_states()),
+        map,
+        &points,
+    )?;
     Ok(())
 }

@@ -92,20 +92,42 @@ pub fn run(a: SimArgs) -> Result<()> {
     // Written into a staging directory, moved into place only when all is done: a
     // failure or Ctrl-C leaves nothing a user could take for a result.
     let stage = Staging::new(&a.out)?;
-    let out_dir = stage.path().to_path_buf();
+    write_outputs(stage.path(), &a, &sc, &frames, &truth)?;
+    let detections: usize = frames.iter().map(|f| f.detections.len()).sum();
+    outln!(
+        "{}: {} frames, {} detections, {} landmarks, {} walls; wrote {}",
+        a.scenario,
+        frames.len(),
+        detections,
+        sc.world.spec().landmarks.len(),
+        sc.world.spec().walls.len(),
+        a.out.display()
+    )?;
+    stage.commit()?;
+    Ok(())
+}
+
+/// The run's files in `dir`: observations, world, truth, the MCAP log and its picture.
+fn write_outputs(
+    dir: &std::path::Path,
+    a: &SimArgs,
+    sc: &sim2d::Scenario,
+    frames: &[sim2d::Frame],
+    truth: &std::collections::BTreeMap<u32, [f64; 2]>,
+) -> Result<()> {
     let mut csv = Vec::new();
-    sim2d::write_observations_csv(&frames, &mut csv)?;
-    write_atomic(&out_dir.join("observations.csv"), &csv)?;
+    sim2d::write_observations_csv(frames, &mut csv)?;
+    write_atomic(&dir.join("observations.csv"), &csv)?;
     write_atomic(
-        &out_dir.join("world.toml"),
+        &dir.join("world.toml"),
         toml::to_string(sc.world.spec())?.as_bytes(),
     )?;
     let mut truth_csv = CsvTable::new(["landmark", "x", "y"])?;
-    for (id, p) in &truth {
+    for (id, p) in truth {
         truth_csv.row([id.to_string(), p[0].to_string(), p[1].to_string()])?;
     }
-    truth_csv.write(&out_dir.join("truth.csv"))?;
-    write_log(&out_dir.join("run.mcap"), &sc, &frames, &truth)?;
+    truth_csv.write(&dir.join("truth.csv"))?;
+    write_log(&dir.join("run.mcap"), sc, frames, truth)?;
     let traj: Vec<(f64, f64)> = frames.iter().map(|f| (f.pose.x, f.pose.y)).collect();
     let rays: Vec<qrm_plot::Segment> = frames
         .iter()
@@ -124,7 +146,7 @@ pub fn run(a: SimArgs) -> Result<()> {
         })
         .collect();
     write_picture(
-        &out_dir.join("scenario"),
+        &dir.join("scenario"),
         &qrm_plot::scenario_map(
             &format!("{} (seed {})", a.scenario, a.seed),
             sc.world.spec(),
@@ -132,17 +154,6 @@ pub fn run(a: SimArgs) -> Result<()> {
             &rays,
         )?,
     )?;
-    let detections: usize = frames.iter().map(|f| f.detections.len()).sum();
-    outln!(
-        "{}: {} frames, {} detections, {} landmarks, {} walls; wrote {}",
-        a.scenario,
-        frames.len(),
-        detections,
-        sc.world.spec().landmarks.len(),
-        sc.world.spec().walls.len(),
-        a.out.display()
-    )?;
-    stage.commit()?;
     Ok(())
 }
 

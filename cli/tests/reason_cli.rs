@@ -333,6 +333,21 @@ fn study_runs_on_mrclam_and_judges_its_claims() {
         .unwrap();
     let random = r["hidden"]["random"]["error_rate"].as_f64().unwrap();
     assert!(inferred < random, "inference {inferred} vs random {random}");
+    // issue 14: the reasoning study is the registry's `reason`; its claims are judged in the
+    // report by computed verdicts, its tables written as CSV
     let report = std::fs::read_to_string(out.join("report.md")).unwrap();
-    assert!(report.contains("| claim | ours | holds |"));
+    assert!(
+        report.contains("| claim | thesis | ours | verdict |"),
+        "{report}"
+    );
+    assert!(
+        report.contains("inferred hidden sets beat the marginal prior"),
+        "{report}"
+    );
+    let csv = std::fs::read_to_string(out.join("scores.csv")).unwrap();
+    assert!(
+        csv.starts_with("calculus,part,predictor,n,error_rate,"),
+        "{csv}"
+    );
+    assert!(out.join("check.csv").is_file() && out.join("config.toml").is_file());
 }

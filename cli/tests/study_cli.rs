@@ -95,6 +95,7 @@ fn list_config_and_refusals() {
         [
             "monte-carlo",
             "real-data",
+            "reason",
             "serge-cv",
             "table-4-1",
             "field",
@@ -151,7 +152,7 @@ fn list_config_and_refusals() {
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(
         err.contains("invalid value 'table-9-9'")
-            && err.contains("monte-carlo, real-data, serge-cv, table-4-1, field, demo"),
+            && err.contains("monte-carlo, real-data, reason, serge-cv, table-4-1, field, demo"),
         "{err}"
     );
 }

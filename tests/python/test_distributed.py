@@ -47,12 +47,23 @@ def real_config() -> dict:
     return cfg
 
 
+def reason_config() -> dict:
+    cfg = qrm.studies.config("reason", seed=2)
+    d = os.path.join(os.path.dirname(__file__), "..", "..", "..", "shared", "data", "mrclam-dataset7")
+    if not os.path.isdir(d):
+        pytest.skip("shared/data/mrclam-dataset7 not found beside the checkout")
+    cfg.update(input=os.path.abspath(d), max_frames=40)
+    cfg["study"].update(calculi=["left-right", "double-cross"], worlds_b=1)  # a shard each
+    return cfg
+
+
 def demo_config() -> dict:
     return qrm.studies.config("demo", seed=1)  # one shard: the pipeline is one run
 
 
 CASES = [("monte-carlo", mc_config), ("real-data", real_config), ("table-4-1", t41_config),
-         ("field", field_config), ("serge-cv", serge_config), ("demo", demo_config)]
+         ("field", field_config), ("serge-cv", serge_config), ("reason", reason_config),
+         ("demo", demo_config)]
 QUICK = [("monte-carlo", 3), ("table-4-1", 1)]  # the quick configs, with their seeds
 
 

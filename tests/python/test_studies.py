@@ -170,3 +170,35 @@ def test_the_demo_runs_from_python_with_the_files_of_qrm_demo(qrm_bin, tmp_path)
     assert (out / "learned_calculus.json").read_text() == files["learned_calculus.json"]["text"]
     with pytest.raises(qrm.InvalidInput, match="nav_range"):
         qrm.studies.run("demo", {"seed": 1, "nav_range": -1.0})
+
+
+def test_the_reasoning_study_runs_from_python_as_on_the_command_line(mrclam_dir, qrm_bin, tmp_path):
+    # issue 14 §2: `qrm reason study` is the registry's `reason`; Python gets the same scores
+    cfg = qrm.studies.config("reason", seed=4)
+    cfg.update(input=str(mrclam_dir), max_frames=80)
+    cfg["study"]["calculi"] = ["double-cross"]
+    run = qrm.studies.run("reason", cfg)
+    conforms(run, qt.StudyRun)
+    report = run["report"]
+    assert {c["verdict"] for c in report["claims"]} <= {"holds", "violated"}
+    kinds = {f["plot"]["kind"] for f in report["figures"]}
+    assert kinds <= {"lines", "reference-pair"} and "lines" in kinds
+    out = tmp_path / "reason"
+    subprocess.run(
+        [qrm_bin, "reason", "study", "--quick", "--calculi", "double-cross", "--max-frames", "80",
+         "--seed", "4", "--input", str(mrclam_dir), "--out", str(out)],
+        check=True,
+        capture_output=True,
+    )
+    with open(out / "scores.csv", newline="") as f:
+        cli_rows = list(csv.reader(f))
+    table = next(t for t in report["tables"] if t["name"] == "scores")
+    assert cli_rows == [[c["key"] for c in table["columns"]]] + [
+        [cell["csv"] for cell in row] for row in table["rows"]
+    ]
+    reason_json = next(a for a in report["attachments"] if a["name"] == "reason.json")
+    assert (out / "reason.json").read_text() == reason_json["text"]
+    with pytest.raises(qrm.InvalidInput, match="hide_fraction"):
+        bad = json.loads(json.dumps(cfg))
+        bad["study"]["hide_fraction"] = 1.5
+        qrm.studies.run("reason", bad)

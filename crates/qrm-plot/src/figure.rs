@@ -4,7 +4,7 @@
 use studies::{Figure, Plot};
 
 use crate::charts::{Series, edc_scatter, heatmap, histogram, line_chart};
-use crate::regions::{RegionPicture, region_map};
+use crate::regions::{RegionPicture, reference_pair, region_map};
 use crate::sites::{DemoPicture, demo_picture, runs_map};
 use crate::{Picture, Result};
 
@@ -65,6 +65,7 @@ pub fn figure(f: &Figure) -> Result<Picture> {
                 runs.iter().map(|r| (r.points.clone(), r.reached)).collect();
             runs_map(&f.title, world, drive, &runs)
         }
+        Plot::ReferencePair { observed, inferred } => reference_pair(&f.title, observed, inferred),
         Plot::Navigation(n) => {
             let panel = n.regions.as_ref().map(|r| {
                 (

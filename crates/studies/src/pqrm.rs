@@ -2,3 +2,4 @@
 
 pub mod monte_carlo;
 pub mod real_data;
+pub mod reasoning;

@@ -8,6 +8,7 @@ use crate::study::{AnyStudy, Registered};
 pub static STUDIES: &[&dyn AnyStudy] = &[
     &Registered::<crate::pqrm::monte_carlo::MonteCarlo>::new(),
     &Registered::<crate::pqrm::real_data::RealData>::new(),
+    &Registered::<crate::pqrm::reasoning::ReasonStudy>::new(),
     &Registered::<crate::serge::SergeStudy>::new(),
     &Registered::<crate::qlink::table_4_1::Table41>::new(),
     &Registered::<crate::qlink::field::FieldExperiment>::new(),

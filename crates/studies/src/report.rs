@@ -421,6 +421,15 @@ pub enum Plot {
         /// The runs.
         runs: Vec<SiteRun>,
     },
+    /// Every landmark in the normalised frame of one reference pair, coloured by a
+    /// probability: those whose set with the pair was observed (circles) and those inferred
+    /// (triangles), `(x, y, p)` each (the reasoning study).
+    ReferencePair {
+        /// Observed sets.
+        observed: Vec<(f64, f64, f64)>,
+        /// Inferred sets.
+        inferred: Vec<(f64, f64, f64)>,
+    },
     /// One navigation over a simulated site and, beside it, a calculus's regions (the demo's
     /// picture); boxed, being far larger than the other kinds.
     Navigation(Box<NavigationPicture>),

@@ -3,7 +3,7 @@ on the command line (the studies themselves are in the Rust `studies` crate).
 
     >>> import qrm
     >>> [name for name, _ in qrm.studies.available()]
-    ['monte-carlo', 'real-data', 'serge-cv', 'table-4-1', 'field', 'demo']
+    ['monte-carlo', 'real-data', 'reason', 'serge-cv', 'table-4-1', 'field', 'demo']
     >>> cfg = qrm.studies.config("table-4-1")          # the quick config, a dict to edit
     >>> cfg["pairs"] = 40
     >>> run = qrm.studies.run("table-4-1", cfg)        # doctest: +SKIP
@@ -75,6 +75,9 @@ def _as_run(text: str) -> types.StudyRun:
             plot["drive"] = [tuple(p) for p in plot["drive"]]
             for r in plot["runs"]:
                 r["points"] = [tuple(p) for p in r["points"]]
+        elif plot["kind"] == "reference-pair":
+            plot["observed"] = [tuple(p) for p in plot["observed"]]
+            plot["inferred"] = [tuple(p) for p in plot["inferred"]]
         elif plot["kind"] == "navigation" and plot["regions"] is not None:
             panel = plot["regions"]
             panel["marks"] = [(list(at), label) for at, label in panel["marks"]]

@@ -570,6 +570,16 @@ class SitePlot(TypedDict):
     runs: List[SiteRun]
 
 
+class ReferencePairPlot(TypedDict):
+    """Every landmark in the normalised frame of one reference pair, `(x, y, p)` with p the
+    probability of the true state: sets observed with the pair, and sets inferred (the
+    reasoning study)."""
+
+    kind: Literal["reference-pair"]
+    observed: List[Tuple[float, float, float]]
+    inferred: List[Tuple[float, float, float]]
+
+
 class RegionsPanel(TypedDict):
     """A calculus's regions on a grid over its normalised frame (A = (0, 0), B = (1, 0)), row
     by row, drawn beside another picture."""
@@ -608,7 +618,14 @@ class ReportFigure(TypedDict):
     x_label: str
     y_label: str
     plot: Union[
-        HistogramPlot, LinesPlot, EdcScatterPlot, HeatmapPlot, RegionsPlot, SitePlot, NavigationPlot
+        HistogramPlot,
+        LinesPlot,
+        EdcScatterPlot,
+        HeatmapPlot,
+        RegionsPlot,
+        SitePlot,
+        ReferencePairPlot,
+        NavigationPlot,
     ]
 
 

@@ -8,7 +8,7 @@ use qlink::{Controller, ControllerKind, Layer, LinkGraph, NavConfig, Qualitative
 use qsr_core::Calculus;
 use qsr_core::progress::Progress;
 use serge::learn::triplet_beliefs;
-use serge::selection::{Sighting, TripletSelection};
+use serge::selection::TripletSelection;
 use serge::{CellMasses, Grid, Serge, SergeParams};
 
 use super::{DemoConfig, DemoOutput, Learned, choice, log, picture};
@@ -185,19 +185,7 @@ const LEARN_TRIPLETS: usize = 30;
 /// # Errors
 /// SERGE's.
 pub fn learn_calculus(scans: &[Scan], seed: u64) -> Result<Option<Calculus>> {
-    let frames: Vec<Vec<Sighting>> = scans
-        .iter()
-        .map(|s| {
-            s.observations
-                .iter()
-                .map(|o| Sighting {
-                    id: o.id.0,
-                    xy: o.mean,
-                    cov: o.cov,
-                })
-                .collect()
-        })
-        .collect();
+    let frames = crate::recording::sightings(scans);
     let selection = TripletSelection {
         min_frames: LEARN_MIN_FRAMES,
         max_triplets: LEARN_TRIPLETS,
