@@ -136,11 +136,11 @@ fn show(out: &mut impl Write, c: &BinaryCalculus, json: bool) -> Result<()> {
 }
 
 fn classify(out: &mut impl Write, c: &BinaryCalculus) -> Result<()> {
-    crate::calculus_cmd::classify_stdin(out, |row| Ok(c.label(c.classify_row(row)?).to_owned()))
+    crate::calculus_text::classify_stdin(out, |row| Ok(c.label(c.classify_row(row)?).to_owned()))
 }
 
 fn neighbours(out: &mut impl Write, c: &BinaryCalculus, json: bool) -> Result<()> {
-    crate::calculus_cmd::write_neighbours(out, c.name(), c.labels(), c.neighbours()?, json)
+    crate::calculus_text::write_neighbours(out, c.name(), c.labels(), c.neighbours()?, json)
 }
 
 fn compose(out: &mut impl Write, c: &BinaryCalculus, format: TableFormat) -> Result<()> {

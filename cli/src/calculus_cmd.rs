@@ -1,7 +1,7 @@
 //! `qrm calculus ...`: thin formatting over `qsr_core`.
 
 use std::collections::BTreeMap;
-use std::io::{BufRead, Read, Write};
+use std::io::Write;
 use std::path::PathBuf;
 
 use anyhow::{Context, Result, bail};
@@ -11,6 +11,7 @@ use serde_json::json;
 
 use crate::args::CalculusCmd;
 use crate::binary_cmd::{BinaryJob, TableFormat};
+use crate::calculus_text::{classify_stdin, write_neighbours};
 use crate::output::write_atomic;
 
 /// Validated form of a `calculus` subcommand (stage two of argument parsing).
@@ -329,92 +330,8 @@ fn classify(out: &mut impl Write, c: &Calculus) -> Result<()> {
     classify_stdin(out, |row| Ok(c.label(c.classify_row(row)?).to_owned()))
 }
 
-/// A line as quoted in an error: at most 60 characters (a 2 MB line is not echoed whole).
-fn shown(text: &str) -> String {
-    match text.char_indices().nth(60) {
-        None => text.to_owned(),
-        Some((cut, _)) => format!("{}… ({} bytes)", &text[..cut], text.len()),
-    }
-}
-
-/// Reads configurations from stdin, one per line (blank lines and `#` comments skipped), and
-/// prints one label per line — only once every line classified, so a bad line leaves no
-/// partial output.
-pub fn classify_stdin(
-    out: &mut impl Write,
-    label_of: impl Fn(&[f64]) -> Result<String, qsr_core::QsrError>,
-) -> Result<()> {
-    let stdin = std::io::stdin();
-    let mut labels = String::new();
-    // Capped like every input file: an endless line (`< /dev/zero`) ends instead of growing.
-    let capped = stdin.lock().take(qsr_core::text_file::MAX_INPUT_BYTES);
-    for (i, line) in capped.lines().enumerate() {
-        let lineno = i + 1;
-        let line = line.with_context(|| format!("reading stdin line {lineno}"))?;
-        let text = line.trim();
-        if text.is_empty() || text.starts_with('#') {
-            continue;
-        }
-        let row: Vec<f64> = text
-            .split_whitespace()
-            .map(str::parse::<f64>)
-            .collect::<Result<_, _>>()
-            .with_context(|| {
-                format!("line {lineno}: `{}` is not a list of numbers", shown(text))
-            })?;
-        let label = label_of(&row).with_context(|| format!("line {lineno}: `{}`", shown(text)))?;
-        labels.push_str(&label);
-        labels.push('\n');
-    }
-    out.write_all(labels.as_bytes())?;
-    Ok(())
-}
-
 fn neighbours(out: &mut impl Write, c: &Calculus, json: bool) -> Result<()> {
     write_neighbours(out, c.name(), c.labels(), c.neighbours(), json)
-}
-
-/// The neighbour graph as text (adjacency lists and the distance matrix) or JSON
-/// `{"states", "adjacent", "distance", "diameter"}`; shared by ternary and binary calculi.
-pub fn write_neighbours(
-    out: &mut impl Write,
-    name: &str,
-    labels: &[String],
-    g: &qsr_core::NeighbourGraph,
-    json: bool,
-) -> Result<()> {
-    let label = |s: &StateId| labels[s.index()].as_str();
-    if json {
-        let v = json!({
-            "states": labels,
-            "adjacent": g.edges().iter().map(|(a, b)| [label(a), label(b)]).collect::<Vec<_>>(),
-            "distance": g.distance_matrix(),
-            "diameter": g.diameter(),
-        });
-        writeln!(out, "{}", serde_json::to_string(&v)?)?;
-        return Ok(());
-    }
-    writeln!(
-        out,
-        "{name}: {} states, {} adjacent pairs, diameter {:?}",
-        labels.len(),
-        g.edges().len(),
-        g.diameter()
-    )?;
-    for (i, l) in labels.iter().enumerate() {
-        let s = StateId(u16::try_from(i).unwrap_or(u16::MAX));
-        let ns: Vec<&str> = g.neighbours_of(s).iter().map(label).collect();
-        writeln!(out, "  {l:<16} {}", ns.join(" "))?;
-    }
-    writeln!(out, "distance matrix (rows and columns in state order):")?;
-    for row in g.distance_matrix() {
-        let cells: Vec<String> = row
-            .iter()
-            .map(|d| d.map_or("-".into(), |d| d.to_string()))
-            .collect();
-        writeln!(out, "  {}", cells.join(" "))?;
-    }
-    Ok(())
 }
 
 fn compose(out: &mut impl Write, c: &Calculus, json: bool, cells: bool) -> Result<()> {

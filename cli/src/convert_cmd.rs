@@ -6,7 +6,7 @@ use std::path::PathBuf;
 use anyhow::{Context, Result, bail};
 use pqrm::loaders::read_truth_csv;
 
-use crate::args::InputFormat;
+use crate::flags::InputFormat;
 
 /// `qrm convert`.
 #[derive(Debug, clap::Args)]
@@ -23,7 +23,7 @@ pub struct ConvertArgs {
     /// Range-bearing noise (MRCLAM), resolved as `qrm map` does, so the log maps as the
     /// recording does.
     #[command(flatten)]
-    pub noise: crate::args::NoiseArgs,
+    pub noise: crate::flags::NoiseArgs,
     /// The MCAP file to write.
     #[arg(long)]
     pub out: PathBuf,
@@ -34,8 +34,8 @@ pub fn run(a: ConvertArgs) -> Result<()> {
     if a.from == InputFormat::Mcap {
         bail!("--from mcap: the input is MCAP already");
     }
-    let (noise, _) = crate::pqrm_cmd::resolve_noise(a.from, &a.input, &a.noise)?;
-    let mut data = crate::pqrm_cmd::load_dataset(a.from, &a.input, noise)?;
+    let (noise, _) = crate::recording::resolve_noise(a.from, &a.input, &a.noise)?;
+    let mut data = crate::recording::load_dataset(a.from, &a.input, noise)?;
     if let Some(t) = &a.truth {
         data.truth = Some(read_truth_csv(t)?);
     }

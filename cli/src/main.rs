@@ -22,14 +22,17 @@ macro_rules! outln {
 mod args;
 mod binary_cmd;
 mod calculus_cmd;
+mod calculus_text;
 mod convert_cmd;
 mod demo_cmd;
 mod field_cmd;
+mod flags;
 mod output;
 mod pqrm_cmd;
 mod progress;
 mod qlink_cmd;
 mod reason_cmd;
+mod recording;
 mod serge_cmd;
 mod sim_cmd;
 mod study_cmd;

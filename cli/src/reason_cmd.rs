@@ -95,8 +95,8 @@ pub struct ReasonStudyArgs {
     #[arg(long)]
     pub quick: bool,
     /// Recording format: mrclam brings its surveyed truth, the others need --truth.
-    #[arg(long, value_enum, default_value_t = crate::args::InputFormat::Mrclam)]
-    pub format: crate::args::InputFormat,
+    #[arg(long, value_enum, default_value_t = crate::flags::InputFormat::Mrclam)]
+    pub format: crate::flags::InputFormat,
     /// The recording (default: ../shared/data/mrclam-dataset7).
     #[arg(long)]
     pub input: Option<PathBuf>,

@@ -4,6 +4,7 @@ pub mod cross_validation;
 pub mod datasets;
 pub mod examples;
 pub mod learned_calculus;
+mod output;
 mod report;
 pub mod resolution_tree;
 pub mod study;

@@ -24,6 +24,7 @@ use serde::{Deserialize, Serialize};
 use crate::error::{Result, StudyError};
 use crate::report::{Attachment, Report};
 use crate::study::Study;
+use crate::world_perception::WorldPerception;
 
 pub mod choice;
 pub mod log;
@@ -95,6 +96,61 @@ pub struct DemoOutput {
     pub log: Attachment,
 }
 
+/// Runs the demo of `config`.
+///
+/// # Errors
+/// The crates' errors; [`StudyError::InvalidParameter`] when the seed's drive or the goal
+/// leaves nothing to navigate; [`StudyError::Cancelled`] when `progress` asks.
+fn run(config: &DemoConfig, progress: &dyn Progress) -> Result<DemoOutput> {
+    progress.add_total(3);
+    let mapping = pipeline::map_by_lidar(config.seed)?;
+    let (flip, entropy) = pipeline::flip_flop_map(&mapping.scans, config.seed)?;
+    progress.tick();
+    progress.check()?;
+    let learned = pipeline::learn_calculus(&mapping.scans, config.seed)?;
+    let map = pipeline::qualitative_map(flip, learned.as_ref(), &mapping.scans, config.seed)?;
+    progress.tick();
+    progress.check()?;
+    let (graph, nav_config) = pipeline::navigator(&map, &mapping.scenario)?;
+    let perception = WorldPerception::new(&mapping.scenario.world, config.nav_range);
+    let setting = choice::Setting {
+        map: &map,
+        graph: &graph,
+        perception: &perception,
+        config: &nav_config,
+    };
+    let run = choice::choose_run(&setting, &mapping.frames, config.goal, progress)?;
+    progress.tick();
+    let log = log::write(&log::Run {
+        scenario: &mapping.scenario,
+        frames: &mapping.frames,
+        map: &map,
+        entropy: &entropy,
+        outcome: &run.outcome,
+        goal: run.goal,
+    })?;
+    let picture = picture::Picture::new(&mapping, &map, &perception, &run, learned.as_ref());
+    Ok(DemoOutput {
+        config: config.clone(),
+        frames: mapping.frames.len(),
+        recognised_landmarks: mapping.recognised,
+        map_elements: map.elements().len(),
+        link_graph_edges: graph.n_edges(),
+        learned: learned
+            .map(|c| {
+                Ok::<_, StudyError>(Learned {
+                    states: c.n_states(),
+                    spec: Attachment::text("learned_calculus.json", c.spec().to_json_string()?),
+                })
+            })
+            .transpose()?,
+        map_range: mapping.scenario.lidar.max_range,
+        run,
+        picture,
+        log: Attachment::binary("run.mcap", log),
+    })
+}
+
 /// The demo as a study.
 #[derive(Debug, Clone, Copy)]
 pub struct Demo;
@@ -134,7 +190,7 @@ impl Study for Demo {
                 "the demo is one shard, not shard {index}"
             )));
         }
-        pipeline::run(config, progress)
+        run(config, progress)
     }
     fn aggregate(config: &DemoConfig, shards: Vec<(usize, DemoOutput)>) -> Result<DemoOutput> {
         crate::shard::check_indices(1, shards.iter().map(|(i, _)| *i))?;

@@ -6,15 +6,11 @@ use std::collections::{BTreeMap, BTreeSet};
 use pqrm::{LandmarkId, Observation, Pqrm, PqrmConfig, Scan};
 use qlink::{Controller, ControllerKind, Layer, LinkGraph, NavConfig, QualitativeMap, SearchPomdp};
 use qsr_core::Calculus;
-use qsr_core::progress::Progress;
 use serge::learn::triplet_beliefs;
 use serge::selection::TripletSelection;
 use serge::{CellMasses, Grid, Serge, SergeParams};
 
-use super::{DemoConfig, DemoOutput, Learned, choice, log, picture};
 use crate::error::{Result, StudyError};
-use crate::report::Attachment;
-use crate::world_perception::WorldPerception;
 
 /// Landmarks two map elements share for a link: 2, as in the thesis's field experiment
 /// (§4.4.2) — with one, elements spanning the site link far-apart places in one step.
@@ -41,61 +37,6 @@ pub struct Mapping {
 
 /// Mean belief entropy after a scan (eq. 2.11): `(t, nats, landmark sets)`, for the log.
 pub type EntropyPoint = (f64, f64, usize);
-
-/// Runs the demo of `config`.
-///
-/// # Errors
-/// The crates' errors; [`StudyError::InvalidParameter`] when the seed's drive or the goal
-/// leaves nothing to navigate; [`StudyError::Cancelled`] when `progress` asks.
-pub fn run(config: &DemoConfig, progress: &dyn Progress) -> Result<DemoOutput> {
-    progress.add_total(3);
-    let mapping = map_by_lidar(config.seed)?;
-    let (flip, entropy) = flip_flop_map(&mapping.scans, config.seed)?;
-    progress.tick();
-    progress.check()?;
-    let learned = learn_calculus(&mapping.scans, config.seed)?;
-    let map = qualitative_map(flip, learned.as_ref(), &mapping.scans, config.seed)?;
-    progress.tick();
-    progress.check()?;
-    let (graph, nav_config) = navigator(&map, &mapping.scenario)?;
-    let perception = WorldPerception::new(&mapping.scenario.world, config.nav_range);
-    let setting = choice::Setting {
-        map: &map,
-        graph: &graph,
-        perception: &perception,
-        config: &nav_config,
-    };
-    let run = choice::choose_run(&setting, &mapping.frames, config.goal, progress)?;
-    progress.tick();
-    let log = log::write(&log::Run {
-        scenario: &mapping.scenario,
-        frames: &mapping.frames,
-        map: &map,
-        entropy: &entropy,
-        outcome: &run.outcome,
-        goal: run.goal,
-    })?;
-    let picture = picture::Picture::new(&mapping, &map, &perception, &run, learned.as_ref());
-    Ok(DemoOutput {
-        config: config.clone(),
-        frames: mapping.frames.len(),
-        recognised_landmarks: mapping.recognised,
-        map_elements: map.elements().len(),
-        link_graph_edges: graph.n_edges(),
-        learned: learned
-            .map(|c| {
-                Ok::<_, StudyError>(Learned {
-                    states: c.n_states(),
-                    spec: Attachment::text("learned_calculus.json", c.spec().to_json_string()?),
-                })
-            })
-            .transpose()?,
-        map_range: mapping.scenario.lidar.max_range,
-        run,
-        picture,
-        log: Attachment::binary("run.mcap", log),
-    })
-}
 
 /// The mapping drive with the lidar; landmarks recognised by triangles, no ids given. The
 /// recognised ids are matched to the world's (first recognition) so that the navigating

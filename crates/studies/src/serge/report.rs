@@ -7,7 +7,7 @@ use std::fmt::Write as _;
 use super::cross_validation::{CvRecord, CvSummary, StudyConfig};
 use super::datasets::DatasetName;
 use super::examples::DatasetExamples;
-use super::study::{DatasetResult, SergeOutput};
+use super::output::{DatasetResult, SergeOutput};
 use crate::report::{Attachment, Cell, Claim, Column, Figure, Line, Plot, Report, Table, Verdict};
 
 /// Thesis §3.4.2: lab errors stay below this in every test.

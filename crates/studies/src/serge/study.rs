@@ -4,9 +4,10 @@
 use qsr_core::progress::Progress;
 use serde::{Deserialize, Serialize};
 
-use super::cross_validation::{CvRecord, CvSummary, StudyConfig, cross_validate_fold, summarise};
+use super::cross_validation::{CvRecord, StudyConfig, cross_validate_fold, summarise};
 use super::datasets::{Dataset, DatasetName};
 use super::examples::{DatasetExamples, examples};
+pub use super::output::{DatasetResult, SergeOutput};
 use crate::error::{Result, StudyError};
 use crate::report::Report;
 use crate::shard::check_indices;
@@ -44,36 +45,6 @@ pub struct SergeShard {
     pub k: usize,
     /// The part.
     pub part: SergePart,
-}
-
-/// One dataset's results.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct DatasetResult {
-    /// The dataset.
-    pub dataset: DatasetName,
-    /// Its beliefs K.
-    pub k: usize,
-    /// Every SERGE run, fold by fold.
-    pub records: Vec<CvRecord>,
-    /// Mean ± sd over folds per setting.
-    pub summary: Vec<CvSummary>,
-    /// Example maps and the use case.
-    pub examples: DatasetExamples,
-}
-
-/// What a run of the study produced.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct SergeOutput {
-    /// The datasets, in the config's order.
-    pub datasets: Vec<DatasetResult>,
-}
-
-impl SergeOutput {
-    /// The result of `name`.
-    #[must_use]
-    pub fn dataset(&self, name: DatasetName) -> Option<&DatasetResult> {
-        self.datasets.iter().find(|d| d.dataset == name)
-    }
 }
 
 /// Dataset `name` as the study uses it.

@@ -3,89 +3,21 @@
 
 use qsr_core::progress::Progress;
 use qsr_core::stats::MeanSd;
-use serde::{Deserialize, Serialize};
 
-use super::mapping::MappingStats;
-use super::summary::{
-    BoundRange, BoundSummary, FieldSummary, MapSize, RestrictedPlans, bound_summary, map_size,
-    restricted_plans, summarise,
-};
-use super::trials::{FieldTask, FieldTrial, TaskDraws, run_field};
+use super::summary::{BoundRange, bound_summary, map_size, restricted_plans, summarise};
+use super::trials::{FieldTask, FieldTrial, run_field};
 use super::{FieldParams, FieldVariant};
 use crate::error::{Result, StudyError};
 use crate::report::Report;
 use crate::shard::check_indices;
 use crate::study::Study;
 
+pub use super::output::{FieldOutput, FieldWorld, VariantRate};
+
 /// The field-site experiment of thesis §4.4.2 (see the module): every variant's trials in
 /// each of [`FieldParams::worlds`] simulated worlds.
 #[derive(Debug, Clone, Copy, Default)]
 pub struct FieldExperiment;
-
-/// One world: how its map came out and every trial run in it.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct FieldWorld {
-    /// Its index (the shard's).
-    pub world: usize,
-    /// Its seed: the config's seed + the index.
-    pub seed: u64,
-    /// The mapping drive's figures.
-    pub mapping: MappingStats,
-    /// Why start/goal draws were redrawn.
-    pub draws: TaskDraws,
-    /// Success and failure counts per variant.
-    pub variants: Vec<FieldSummary>,
-    /// The map's size.
-    pub map_size: MapSize,
-    /// The thesis variant's tasks planned on the map and on the map restricted to nearby
-    /// triplets.
-    pub restricted_map_plans: RestrictedPlans,
-    /// The simulated site (for pictures: Fig 4.9).
-    pub site: sim2d::WorldSpec,
-    /// The mapping drive's true positions (m).
-    pub drive: Vec<[f64; 2]>,
-    /// Every trial, variant by variant.
-    pub trials: Vec<FieldTrial>,
-}
-
-/// A variant's success rate over the worlds: the mean and sample sd of the worlds' rates.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-pub struct VariantRate {
-    /// The variant.
-    pub variant: FieldVariant,
-    /// Mean of the worlds' success rates.
-    pub mean: f64,
-    /// Their sample standard deviation (0 for one world).
-    pub sd: f64,
-}
-
-/// What a run of the field experiment produced.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct FieldOutput {
-    /// The worlds, in seed order.
-    pub worlds: Vec<FieldWorld>,
-    /// Counts per variant over all worlds' trials.
-    pub variants: Vec<FieldSummary>,
-    /// Rates per variant over the worlds.
-    pub success_rate_over_worlds: Vec<VariantRate>,
-    /// Propositions 2 and 4 per variant, at the lidar's and at the effective range.
-    pub bounds: Vec<BoundSummary>,
-}
-
-impl FieldOutput {
-    /// Every trial with its world, world by world.
-    pub fn trials(&self) -> impl Iterator<Item = (&FieldWorld, &FieldTrial)> {
-        self.worlds
-            .iter()
-            .flat_map(|w| w.trials.iter().map(move |t| (w, t)))
-    }
-
-    /// The pooled counts of `variant`.
-    #[must_use]
-    pub fn pooled(&self, variant: FieldVariant) -> Option<&FieldSummary> {
-        self.variants.iter().find(|s| s.variant == variant)
-    }
-}
 
 /// Runs world `index` of `config`: maps it, runs every variant's trials, sizes the map.
 ///

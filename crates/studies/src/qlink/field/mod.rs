@@ -50,6 +50,7 @@
 
 mod experiment;
 mod mapping;
+mod output;
 mod perception;
 mod report;
 mod summary;

@@ -4,7 +4,7 @@
 
 use std::fmt::Write as _;
 
-use super::experiment::{FieldOutput, FieldWorld};
+use super::output::{FieldOutput, FieldWorld};
 use super::summary::{BoundRange, BoundSummary, FieldSummary};
 use super::trials::{FieldResult, FieldTrial};
 use super::{FieldParams, FieldVariant};

@@ -1,0 +1,62 @@
+//! Flags shared by several commands: a recording's form and its range-bearing noise. Below
+//! every command module (they import it; it imports none of them).
+
+/// A recording's format (`--format`, `--from`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum InputFormat {
+    /// `t,robot,landmark,x,y,cxx,cxy,cyy` rows.
+    Csv,
+    /// The UTIAS MRCLAM dataset's folder (range-bearing, surveyed landmarks).
+    Mrclam,
+    /// g2o landmark edges.
+    G2o,
+    /// A ROS 2 bag or a Foxglove/qrm MCAP log.
+    Mcap,
+}
+
+impl InputFormat {
+    /// The name on the command line and in summaries.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Self::Csv => "csv",
+            Self::Mrclam => "mrclam",
+            Self::G2o => "g2o",
+            Self::Mcap => "mcap",
+        }
+    }
+}
+
+impl From<InputFormat> for studies::recording::RecordingFormat {
+    fn from(f: InputFormat) -> Self {
+        match f {
+            InputFormat::Csv => Self::Csv,
+            InputFormat::Mrclam => Self::Mrclam,
+            InputFormat::G2o => Self::G2o,
+            InputFormat::Mcap => Self::Mcap,
+        }
+    }
+}
+
+/// Where the range-bearing noise comes from (`--noise`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum NoiseMode {
+    /// Fitted from the recording (`qrm pqrm calibrate`).
+    Auto,
+    /// The given sigmas, else MRCLAM's defaults.
+    Fixed,
+}
+
+/// The range-bearing noise of a recording (MRCLAM), shared by `map`, `pqrm real` and `convert`.
+#[derive(Debug, Clone, clap::Args)]
+pub struct NoiseArgs {
+    /// Range noise (m); given, it wins over the fit (0.15 with `--noise fixed`).
+    #[arg(long)]
+    pub sigma_range: Option<f64>,
+    /// Bearing noise (rad); given, it wins over the fit (0.01 with `--noise fixed`).
+    #[arg(long)]
+    pub sigma_bearing: Option<f64>,
+    /// `auto` fits the noise from the recording itself (as `qrm pqrm calibrate`), `fixed` uses
+    /// --sigma-range/--sigma-bearing. Default: auto for mrclam unless a sigma is given.
+    #[arg(long = "noise", value_enum)]
+    pub mode: Option<NoiseMode>,
+}
