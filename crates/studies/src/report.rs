@@ -17,9 +17,11 @@ pub enum Verdict {
     Agree,
     /// Ours says otherwise.
     Disagree,
-    /// A property the thesis proves holds in our runs.
+    /// A property holds in our runs: one the thesis proves, or a claim of ours where the
+    /// thesis measures nothing (the reasoning study's).
     Holds,
-    /// A property the thesis proves fails in our runs (its assumptions do not hold, or a bug).
+    /// Such a property fails in our runs (a proof's assumptions do not hold, a claim of ours
+    /// is not borne out, or a bug).
     Violated,
 }
 
