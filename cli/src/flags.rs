@@ -17,12 +17,7 @@ pub enum InputFormat {
 impl InputFormat {
     /// The name on the command line and in summaries.
     pub fn as_str(self) -> &'static str {
-        match self {
-            Self::Csv => "csv",
-            Self::Mrclam => "mrclam",
-            Self::G2o => "g2o",
-            Self::Mcap => "mcap",
-        }
+        studies::recording::RecordingFormat::from(self).as_str()
     }
 }
 

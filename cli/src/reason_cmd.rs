@@ -100,7 +100,7 @@ pub struct ReasonStudyArgs {
     /// The recording (default: ../shared/data/mrclam-dataset7).
     #[arg(long)]
     pub input: Option<PathBuf>,
-    /// Surveyed truth for --format csv (`id,x,y`).
+    /// Surveyed truth for a recording without it (CSV `landmark,x,y`, as `qrm sim` writes truth.csv).
     #[arg(long)]
     pub truth: Option<PathBuf>,
     /// Calculi (default: edc, double-cross, quadrant, left-right; quick: edc, double-cross).

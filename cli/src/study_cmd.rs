@@ -290,6 +290,9 @@ pub fn run_study_shown<S: studies::Study>(
     shown: Shown,
 ) -> Result<()> {
     let study = studies::find(S::NAME)?;
+    // Checked as typed first: a value JSON cannot hold (a NaN from a flag) is refused by the
+    // study's own check, naming the field, rather than as a null in its JSON form.
+    S::check(config)?;
     let config = serde_json::to_value(config)?;
     study.check(&config)?;
     run_and_write(study, &config, out, shown)

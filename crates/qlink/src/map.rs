@@ -236,6 +236,20 @@ impl QualitativeMap {
     pub fn elements(&self) -> &[MapElement] {
         &self.elements
     }
+    /// One search POMDP per layer, on the layer's calculus, with the settings `configure`
+    /// sets on the builder's defaults (what the Link Graph's costs and the navigator need).
+    ///
+    /// # Errors
+    /// As [`crate::SearchPomdpBuilder::build`].
+    pub fn search_pomdps(
+        &self,
+        configure: impl for<'c> Fn(crate::SearchPomdpBuilder<'c>) -> crate::SearchPomdpBuilder<'c>,
+    ) -> Result<Vec<crate::SearchPomdp>> {
+        self.layers
+            .iter()
+            .map(|l| configure(crate::SearchPomdp::builder(l.calculus())).build())
+            .collect()
+    }
 
     /// The layers.
     #[must_use]

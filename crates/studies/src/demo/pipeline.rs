@@ -4,7 +4,7 @@
 use std::collections::{BTreeMap, BTreeSet};
 
 use pqrm::{LandmarkId, Observation, Pqrm, PqrmConfig, Scan};
-use qlink::{Controller, ControllerKind, Layer, LinkGraph, NavConfig, QualitativeMap, SearchPomdp};
+use qlink::{Controller, ControllerKind, Layer, LinkGraph, NavConfig, QualitativeMap};
 use qsr_core::Calculus;
 use serge::learn::triplet_beliefs;
 use serge::selection::TripletSelection;
@@ -178,16 +178,7 @@ pub fn navigator(
     map: &QualitativeMap,
     scenario: &sim2d::Scenario,
 ) -> Result<(LinkGraph, NavConfig)> {
-    let pomdps: Vec<SearchPomdp> = map
-        .layers()
-        .iter()
-        .map(|l| {
-            SearchPomdp::builder(l.calculus())
-                .moves(qlink::Moves::Direct)
-                .p_move(0.9)
-                .build()
-        })
-        .collect::<std::result::Result<_, _>>()?;
+    let pomdps = map.search_pomdps(|b| b.moves(qlink::Moves::Direct).p_move(0.9))?;
     let cost = qlink::graph::pomdp_cost(map, &pomdps, qlink::CostModel::NegLogSuccess);
     let graph = LinkGraph::new(map, BETA, cost)?;
     let map_range = scenario.lidar.max_range;

@@ -57,7 +57,7 @@ fn story(config: &DemoConfig, o: &DemoOutput) -> String {
         "qrm demo (seed {}): mapped the field site by lidar alone ({} scans, {} landmarks, {} map \
          elements){learned}.\n\
          Q-Link to landmark {} with nothing but the qualitative map: {}, {} transitions planned, \
-         {} re-plan(s), {:.0} m driven (Prop. 2 bound {:.0} m); {why}.\n\
+         {} re-plan(s), {:.0} m driven (Prop. 2 bound {:.0} m{}); {why}.\n\
          Files: demo.png (the run), run.mcap (Foxglove; layout docs/foxglove/qrm-layout.json), \
          summary.json.\n",
         config.seed,
@@ -70,6 +70,12 @@ fn story(config: &DemoConfig, o: &DemoOutput) -> String {
         nav.replans,
         nav.length,
         nav.bound,
+        if config.nav_range < o.map_range {
+            // Proposition 2 holds for a robot sensing at the mapping range R (§4.3.4)
+            format!(", which assumes R' = R = {:.0} m", o.map_range)
+        } else {
+            String::new()
+        },
     )
 }
 

@@ -28,7 +28,7 @@ pub struct ReasonConfig {
     pub input: PathBuf,
     /// Its form.
     pub format: RecordingFormat,
-    /// Surveyed landmarks `id,x,y` for a recording without them.
+    /// Surveyed landmarks (CSV `landmark,x,y`) for a recording without them.
     #[serde(default)]
     pub truth: Option<PathBuf>,
     /// Use only the first N frames with three or more landmarks (`None`: all).
@@ -88,7 +88,7 @@ pub fn read_recording(config: &ReasonConfig) -> Result<Dataset> {
     }
     if data.truth.is_none() {
         return Err(StudyError::InvalidParameter(format!(
-            "{} has no surveyed truth: give `truth` (a CSV id,x,y; --truth FILE)",
+            "{} has no surveyed truth: give `truth` (a CSV `landmark,x,y`; --truth FILE)",
             config.input.display()
         )));
     }

@@ -290,18 +290,11 @@ pub fn field_graph(
     params: &FieldParams,
     variant: FieldVariant,
 ) -> Result<(LinkGraph, Vec<SearchPomdp>)> {
-    let pomdps: Vec<SearchPomdp> = field
-        .map
-        .layers()
-        .iter()
-        .map(|l| {
-            SearchPomdp::builder(l.calculus())
-                .moves(qlink::Moves::Direct)
-                .p_move(0.9)
-                .horizon(params.horizon)
-                .build()
-        })
-        .collect::<qlink::Result<_>>()?;
+    let pomdps = field.map.search_pomdps(|b| {
+        b.moves(qlink::Moves::Direct)
+            .p_move(0.9)
+            .horizon(params.horizon)
+    })?;
     let graph = if variant.visibility_costs() {
         let map = &field.map;
         let per_link: BTreeMap<u32, Vec<SearchPomdp>> = map
