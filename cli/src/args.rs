@@ -271,7 +271,7 @@ pub struct MapArgs {
 /// `qrm map --map-format`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
 pub enum MapFormatArg {
-    /// JSON up to [`MapFormatArg::AUTO_BINARY_ABOVE`] sets, binary beyond.
+    /// JSON up to 100,000 sets, binary beyond.
     Auto,
     /// Versioned JSON.
     Json,
@@ -279,19 +279,12 @@ pub enum MapFormatArg {
     Binary,
 }
 
-impl MapFormatArg {
-    /// Above this many sets `auto` writes binary: a JSON map of 100,000 EDC sets is ~30 MB.
-    pub const AUTO_BINARY_ABOVE: usize = 100_000;
-
-    /// The format for a map of `n_sets` sets.
-    #[must_use]
-    pub fn resolve(self, n_sets: usize) -> pqrm::map_file::MapFormat {
-        use pqrm::map_file::MapFormat;
-        match self {
-            Self::Json => MapFormat::Json,
-            Self::Binary => MapFormat::Binary,
-            Self::Auto if n_sets > Self::AUTO_BINARY_ABOVE => MapFormat::Binary,
-            Self::Auto => MapFormat::Json,
+impl From<MapFormatArg> for studies::mapping::MapFormatChoice {
+    fn from(f: MapFormatArg) -> Self {
+        match f {
+            MapFormatArg::Auto => Self::Auto,
+            MapFormatArg::Json => Self::Json,
+            MapFormatArg::Binary => Self::Binary,
         }
     }
 }
@@ -299,8 +292,7 @@ impl MapFormatArg {
 /// `qrm map --orderings`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
 pub enum OrderingsArg {
-    /// All six orderings up to [`OrderingsArg::AUTO_CANONICAL_ABOVE`] possible ordered sets,
-    /// canonical beyond.
+    /// All six orderings up to 250,000 possible ordered sets, canonical beyond.
     Auto,
     /// All six orderings of every set.
     All,
@@ -308,44 +300,14 @@ pub enum OrderingsArg {
     Canonical,
 }
 
-impl OrderingsArg {
-    /// Above this many possible ordered sets `auto` records canonical orderings: the six
-    /// orderings of a 65-landmark scan are 262,080 sets (~30 MB and ~2 s per five scans);
-    /// a map of that size is a large map, and a sixth of it serves the same queries.
-    pub const AUTO_CANONICAL_ABOVE: u64 = 250_000;
-
-    /// The orderings for a recording that could give `possible` ordered sets (see
-    /// [`possible_ordered_sets`]).
-    #[must_use]
-    pub fn resolve(self, possible: u64) -> pqrm::Orderings {
-        use pqrm::Orderings;
-        match self {
-            Self::All => Orderings::All,
-            Self::Canonical => Orderings::Canonical,
-            Self::Auto if possible > Self::AUTO_CANONICAL_ABOVE => Orderings::Canonical,
-            Self::Auto => Orderings::All,
+impl From<OrderingsArg> for studies::mapping::OrderingsChoice {
+    fn from(o: OrderingsArg) -> Self {
+        match o {
+            OrderingsArg::Auto => Self::Auto,
+            OrderingsArg::All => Self::All,
+            OrderingsArg::Canonical => Self::Canonical,
         }
     }
-}
-
-/// An upper bound on the ordered sets a map of `scans` can hold: the smaller of
-/// `n(n−1)(n−2)` over the `n` distinct landmarks and the sum of `m(m−1)(m−2)` over the
-/// scans (`m` landmarks each). Saturates instead of overflowing.
-#[must_use]
-pub fn possible_ordered_sets(scans: &[pqrm::Scan]) -> u64 {
-    let ordered = |m: u64| {
-        m.saturating_mul(m.saturating_sub(1))
-            .saturating_mul(m.saturating_sub(2))
-    };
-    let distinct: std::collections::BTreeSet<u32> = scans
-        .iter()
-        .flat_map(|s| s.observations.iter().map(|o| o.id.0))
-        .collect();
-    let per_scan = scans
-        .iter()
-        .map(|s| ordered(s.observations.len() as u64))
-        .fold(0u64, u64::saturating_add);
-    ordered(distinct.len() as u64).min(per_scan)
 }
 
 /// `qrm calculus ...`. NAME is a built-in calculus (see `list`) or a path to a TOML/JSON spec.
@@ -429,44 +391,4 @@ pub enum CalculusCmd {
         #[arg(long, default_value_t = 640)]
         width: u32,
     },
-}
-
-#[cfg(test)]
-#[allow(clippy::unwrap_used)] // tests: a panic is the failure report
-mod tests {
-    use super::*;
-
-    fn scan(ids: std::ops::Range<u32>) -> pqrm::Scan {
-        let obs = ids
-            .map(|i| pqrm::Observation {
-                id: pqrm::LandmarkId(i),
-                mean: [f64::from(i), 0.5 * f64::from(i % 3)],
-                cov: [[0.04, 0.0], [0.0, 0.04]],
-            })
-            .collect();
-        pqrm::Scan::new(0.0, 1, obs).unwrap()
-    }
-
-    #[test]
-    fn possible_ordered_sets_is_the_smaller_bound() {
-        // Few scans of many landmarks: the landmarks bound.
-        assert_eq!(possible_ordered_sets(&[scan(0..10), scan(0..10)]), 720);
-        // Many landmarks, each scan sees a few: the scans bound.
-        let scans: Vec<_> = (0..5).map(|s| scan(s * 4..s * 4 + 4)).collect();
-        assert_eq!(possible_ordered_sets(&scans), 5 * 24);
-        assert_eq!(possible_ordered_sets(&[]), 0);
-        assert_eq!(possible_ordered_sets(&[scan(0..2)]), 0);
-    }
-
-    #[test]
-    fn auto_turns_canonical_above_64_landmarks_in_view() {
-        let at = |n: u64| OrderingsArg::Auto.resolve(n * (n - 1) * (n - 2));
-        assert_eq!(at(64), pqrm::Orderings::All);
-        assert_eq!(at(65), pqrm::Orderings::Canonical);
-        assert_eq!(OrderingsArg::All.resolve(u64::MAX), pqrm::Orderings::All);
-        assert_eq!(
-            OrderingsArg::Canonical.resolve(6),
-            pqrm::Orderings::Canonical
-        );
-    }
 }

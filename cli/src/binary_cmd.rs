@@ -1,13 +1,11 @@
 //! `qrm calculus ...` for binary calculi (OPRA-m, STAR-m): thin formatting over
 //! `qsr_core::binary`.
 
-use std::collections::BTreeMap;
 use std::io::Write;
 use std::path::PathBuf;
 use std::time::Instant;
 
 use anyhow::Result;
-use qsr_core::StateId;
 use qsr_core::binary::{BinaryCalculus, CacheOutcome, render_binary_svg};
 use serde_json::json;
 
@@ -85,10 +83,6 @@ fn tables(c: &BinaryCalculus) -> Result<()> {
     Ok(())
 }
 
-fn labels_of(c: &BinaryCalculus, set: &[StateId]) -> Vec<String> {
-    set.iter().map(|s| c.label(*s).to_owned()).collect()
-}
-
 pub fn run(out: &mut impl Write, c: &BinaryCalculus, job: BinaryJob) -> Result<()> {
     match job {
         BinaryJob::Show { json } => show(out, c, json),
@@ -140,107 +134,34 @@ fn classify(out: &mut impl Write, c: &BinaryCalculus) -> Result<()> {
 }
 
 fn neighbours(out: &mut impl Write, c: &BinaryCalculus, json: bool) -> Result<()> {
-    crate::calculus_text::write_neighbours(out, c.name(), c.labels(), c.neighbours()?, json)
+    let g = c.neighbours()?;
+    if json {
+        writeln!(out, "{}", serde_json::to_string(&g.to_json(c.labels()))?)?;
+    } else {
+        write!(out, "{}", g.to_text(c.name(), c.labels()))?;
+    }
+    Ok(())
 }
 
 fn compose(out: &mut impl Write, c: &BinaryCalculus, format: TableFormat) -> Result<()> {
     tables(c)?;
     let t = c.compose_table()?;
-    match format {
-        TableFormat::Json => {
-            let mut table = BTreeMap::new();
-            for r in c.states() {
-                let row: BTreeMap<String, Vec<String>> = c
-                    .states()
-                    .map(|s| (c.label(s).to_owned(), labels_of(c, t.get(r, s))))
-                    .collect();
-                table.insert(c.label(r).to_owned(), row);
-            }
-            writeln!(
-                out,
-                "{}",
-                serde_json::to_string(&json!({"states": c.labels(), "table": table}))?
-            )?;
-        }
-        TableFormat::Gqr => {
-            for r in c.states() {
-                for s in c.states() {
-                    let ts = labels_of(c, t.get(r, s));
-                    writeln!(
-                        out,
-                        "{} : {} :: ({} )",
-                        c.label(r),
-                        c.label(s),
-                        prefixed(&ts)
-                    )?;
-                }
-            }
-        }
-        TableFormat::Text => {
-            writeln!(
-                out,
-                "{}: {{A:B}} ∘ {{B:C}} → {{A:C}}, {} entries",
-                c.name(),
-                t.n_entries()
-            )?;
-            for r in c.states() {
-                for s in c.states() {
-                    writeln!(
-                        out,
-                        "  {} ∘ {} = {{{}}}",
-                        c.label(r),
-                        c.label(s),
-                        labels_of(c, t.get(r, s)).join(", ")
-                    )?;
-                }
-            }
-        }
-    }
+    let text = match format {
+        TableFormat::Json => format!("{}\n", serde_json::to_string(&t.to_json(c.labels()))?),
+        TableFormat::Gqr => t.to_gqr(c.labels()),
+        TableFormat::Text => t.to_text(c.name(), c.labels(), "{A:B} ∘ {B:C} → {A:C}"),
+    };
+    out.write_all(text.as_bytes())?;
     Ok(())
-}
-
-/// GQR writes `( a b c )`: each label preceded by a space.
-fn prefixed(labels: &[String]) -> String {
-    labels.iter().map(|l| format!(" {l}")).collect()
 }
 
 fn converse(out: &mut impl Write, c: &BinaryCalculus, format: TableFormat) -> Result<()> {
     let t = c.converse();
-    match format {
-        TableFormat::Json => {
-            let table: BTreeMap<String, Vec<String>> = c
-                .states()
-                .map(|r| (c.label(r).to_owned(), labels_of(c, t.get(r))))
-                .collect();
-            writeln!(
-                out,
-                "{}",
-                serde_json::to_string(
-                    &json!({"states": c.labels(), "op": "converse", "table": table})
-                )?
-            )?;
-        }
-        TableFormat::Gqr => {
-            for r in c.states() {
-                writeln!(
-                    out,
-                    "{} :: {}",
-                    c.label(r),
-                    labels_of(c, t.get(r)).join(" ")
-                )?;
-            }
-        }
-        TableFormat::Text => {
-            writeln!(out, "{}: converse (X r Y ⇒ Y conv(r) X)", c.name())?;
-            for r in c.states() {
-                writeln!(
-                    out,
-                    "  {:<12} → {{{}}}",
-                    c.label(r),
-                    labels_of(c, t.get(r)).join(", ")
-                )?;
-            }
-        }
-    }
+    let text = match format {
+        TableFormat::Json => format!("{}\n", serde_json::to_string(&t.to_json(c.labels()))?),
+        TableFormat::Gqr => t.to_gqr(c.labels()),
+        TableFormat::Text => t.to_text(c.name(), c.labels()),
+    };
+    out.write_all(text.as_bytes())?;
     Ok(())
 }

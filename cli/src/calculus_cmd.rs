@@ -1,17 +1,16 @@
 //! `qrm calculus ...`: thin formatting over `qsr_core`.
 
-use std::collections::BTreeMap;
 use std::io::Write;
 use std::path::PathBuf;
 
 use anyhow::{Context, Result, bail};
 use qsr_core::binary::{BINARY_NAMES, BinaryCalculus, is_binary_name};
-use qsr_core::{BUILTIN_NAMES, Calculus, Permutation, RenderOptions, StateId};
+use qsr_core::{BUILTIN_NAMES, Calculus, Permutation, RenderOptions};
 use serde_json::json;
 
 use crate::args::CalculusCmd;
 use crate::binary_cmd::{BinaryJob, TableFormat};
-use crate::calculus_text::{classify_stdin, write_neighbours};
+use crate::calculus_text::classify_stdin;
 use crate::output::write_atomic;
 
 /// Validated form of a `calculus` subcommand (stage two of argument parsing).
@@ -244,10 +243,6 @@ pub fn run(cmd: CalculusCmd) -> Result<()> {
     Ok(())
 }
 
-fn labels_of(c: &Calculus, set: &[StateId]) -> Vec<String> {
-    set.iter().map(|s| c.label(*s).to_owned()).collect()
-}
-
 fn show(out: &mut impl Write, c: &Calculus, json: bool) -> Result<()> {
     let spec = c.spec();
     if json {
@@ -331,7 +326,13 @@ fn classify(out: &mut impl Write, c: &Calculus) -> Result<()> {
 }
 
 fn neighbours(out: &mut impl Write, c: &Calculus, json: bool) -> Result<()> {
-    write_neighbours(out, c.name(), c.labels(), c.neighbours(), json)
+    let g = c.neighbours();
+    if json {
+        writeln!(out, "{}", serde_json::to_string(&g.to_json(c.labels()))?)?;
+    } else {
+        write!(out, "{}", g.to_text(c.name(), c.labels()))?;
+    }
+    Ok(())
 }
 
 fn compose(out: &mut impl Write, c: &Calculus, json: bool, cells: bool) -> Result<()> {
@@ -344,37 +345,10 @@ fn compose(out: &mut impl Write, c: &Calculus, json: bool, cells: bool) -> Resul
         c.compose_table()?
     };
     if json {
-        let mut table = BTreeMap::new();
-        for r in c.states() {
-            let mut row = BTreeMap::new();
-            for s in c.states() {
-                row.insert(c.label(s).to_owned(), labels_of(c, t.get(r, s)));
-            }
-            table.insert(c.label(r).to_owned(), row);
-        }
-        writeln!(
-            out,
-            "{}",
-            serde_json::to_string(&json!({"states": c.labels(), "table": table}))?
-        )?;
-        return Ok(());
-    }
-    writeln!(
-        out,
-        "{}: {{AB:C}} ∘ {{BC:D}} → {{AB:D}}, {} entries",
-        c.name(),
-        t.n_entries()
-    )?;
-    for r in c.states() {
-        for s in c.states() {
-            writeln!(
-                out,
-                "  {} ∘ {} = {{{}}}",
-                c.label(r),
-                c.label(s),
-                labels_of(c, t.get(r, s)).join(", ")
-            )?;
-        }
+        writeln!(out, "{}", serde_json::to_string(&t.to_json(c.labels()))?)?;
+    } else {
+        let notation = "{AB:C} ∘ {BC:D} → {AB:D}";
+        write!(out, "{}", t.to_text(c.name(), c.labels(), notation))?;
     }
     Ok(())
 }
@@ -382,25 +356,9 @@ fn compose(out: &mut impl Write, c: &Calculus, json: bool, cells: bool) -> Resul
 fn permute(out: &mut impl Write, c: &Calculus, op: Permutation, json: bool) -> Result<()> {
     let t = c.permutation(op)?;
     if json {
-        let table: BTreeMap<String, Vec<String>> = c
-            .states()
-            .map(|r| (c.label(r).to_owned(), labels_of(c, t.get(r))))
-            .collect();
-        writeln!(
-            out,
-            "{}",
-            serde_json::to_string(&json!({"states": c.labels(), "op": op.name(), "table": table}))?
-        )?;
-        return Ok(());
-    }
-    writeln!(out, "{}: {}", c.name(), op)?;
-    for r in c.states() {
-        writeln!(
-            out,
-            "  {:<16} → {{{}}}",
-            c.label(r),
-            labels_of(c, t.get(r)).join(", ")
-        )?;
+        writeln!(out, "{}", serde_json::to_string(&t.to_json(c.labels()))?)?;
+    } else {
+        write!(out, "{}", t.to_text(c.name(), c.labels()))?;
     }
     Ok(())
 }

@@ -1,11 +1,9 @@
-//! Text forms shared by the ternary and binary calculus commands: configurations classified
-//! from stdin, neighbour graphs printed. Below both command modules.
+//! Configurations classified from stdin, for the ternary and binary calculus commands. Below
+//! both command modules.
 
 use std::io::{BufRead, Read, Write};
 
 use anyhow::{Context, Result};
-use qsr_core::StateId;
-use serde_json::json;
 
 /// A line as quoted in an error: at most 60 characters (a 2 MB line is not echoed whole).
 fn shown(text: &str) -> String {
@@ -45,48 +43,5 @@ pub fn classify_stdin(
         labels.push('\n');
     }
     out.write_all(labels.as_bytes())?;
-    Ok(())
-}
-
-/// The neighbour graph as text (adjacency lists and the distance matrix) or JSON
-/// `{"states", "adjacent", "distance", "diameter"}`; shared by ternary and binary calculi.
-pub fn write_neighbours(
-    out: &mut impl Write,
-    name: &str,
-    labels: &[String],
-    g: &qsr_core::NeighbourGraph,
-    json: bool,
-) -> Result<()> {
-    let label = |s: &StateId| labels[s.index()].as_str();
-    if json {
-        let v = json!({
-            "states": labels,
-            "adjacent": g.edges().iter().map(|(a, b)| [label(a), label(b)]).collect::<Vec<_>>(),
-            "distance": g.distance_matrix(),
-            "diameter": g.diameter(),
-        });
-        writeln!(out, "{}", serde_json::to_string(&v)?)?;
-        return Ok(());
-    }
-    writeln!(
-        out,
-        "{name}: {} states, {} adjacent pairs, diameter {:?}",
-        labels.len(),
-        g.edges().len(),
-        g.diameter()
-    )?;
-    for (i, l) in labels.iter().enumerate() {
-        let s = StateId(u16::try_from(i).unwrap_or(u16::MAX));
-        let ns: Vec<&str> = g.neighbours_of(s).iter().map(label).collect();
-        writeln!(out, "  {l:<16} {}", ns.join(" "))?;
-    }
-    writeln!(out, "distance matrix (rows and columns in state order):")?;
-    for row in g.distance_matrix() {
-        let cells: Vec<String> = row
-            .iter()
-            .map(|d| d.map_or("-".into(), |d| d.to_string()))
-            .collect();
-        writeln!(out, "  {}", cells.join(" "))?;
-    }
     Ok(())
 }

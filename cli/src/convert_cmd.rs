@@ -34,8 +34,9 @@ pub fn run(a: ConvertArgs) -> Result<()> {
     if a.from == InputFormat::Mcap {
         bail!("--from mcap: the input is MCAP already");
     }
-    let (noise, _) = crate::recording::resolve_noise(a.from, &a.input, &a.noise)?;
-    let mut data = crate::recording::load_dataset(a.from, &a.input, noise)?;
+    let warn = |w: String| eprintln!("warning: {w}");
+    let noise = a.noise.request().resolve(a.from.into(), &a.input, &warn)?;
+    let mut data = studies::recording::read(a.from.into(), &a.input, noise.noise)?;
     if let Some(t) = &a.truth {
         data.truth = Some(read_truth_csv(t)?);
     }

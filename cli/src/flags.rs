@@ -55,3 +55,17 @@ pub struct NoiseArgs {
     #[arg(long = "noise", value_enum)]
     pub mode: Option<NoiseMode>,
 }
+
+impl NoiseArgs {
+    /// The request `studies::recording::NoiseRequest` resolves.
+    pub fn request(&self) -> studies::recording::NoiseRequest {
+        studies::recording::NoiseRequest {
+            mode: self.mode.map(|m| match m {
+                NoiseMode::Auto => studies::recording::NoiseMode::Auto,
+                NoiseMode::Fixed => studies::recording::NoiseMode::Fixed,
+            }),
+            sigma_range: self.sigma_range,
+            sigma_bearing: self.sigma_bearing,
+        }
+    }
+}

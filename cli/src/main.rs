@@ -32,7 +32,6 @@ mod pqrm_cmd;
 mod progress;
 mod qlink_cmd;
 mod reason_cmd;
-mod recording;
 mod serge_cmd;
 mod sim_cmd;
 mod study_cmd;

@@ -3,26 +3,24 @@
 use std::fmt::Write as _;
 use std::io::{BufRead, Read, Write};
 use std::path::Path;
-use std::time::Instant;
 
-use anyhow::{Context, Result, bail, ensure};
-use pqrm::loaders::{Dataset, RangeBearingNoise, read_mrclam, read_truth_csv};
+use anyhow::{Context, Result, ensure};
+use pqrm::loaders::{RangeBearingNoise, read_mrclam, read_truth_csv};
 use pqrm::study::ObservationQuery;
 use pqrm::temper::TemperChoice;
 use pqrm::{Orderings, Pqrm, PqrmConfig, evaluate};
 use qsr_core::Calculus;
 use serde_json::json;
 use studies::Study;
+use studies::mapping::{MapJob, OrderingsChoice};
 use studies::pqrm::monte_carlo::MonteCarlo;
 use studies::pqrm::real_data::{NoiseSource, RealData, RealDataConfig};
 
 use crate::args::{
-    CalibrateArgs, MapArgs, MapFormatArg, MergeArgs, OrderingsArg, PqrmCmd, RealArgs, StudyArgs,
-    TruthDataset,
+    CalibrateArgs, MapArgs, MergeArgs, OrderingsArg, PqrmCmd, RealArgs, StudyArgs, TruthDataset,
 };
 use crate::flags::{InputFormat, NoiseMode};
 use crate::output::{Staging, write_atomic, write_picture};
-use crate::recording::{load_dataset, resolve_noise};
 
 /// Runs one `pqrm` subcommand.
 pub fn run(cmd: PqrmCmd) -> Result<()> {
@@ -69,72 +67,35 @@ fn prob(calculus: &str, samples: usize, seed: u64, floor: f64) -> Result<()> {
     Ok(())
 }
 
-/// What `qrm map` read: the recording, the noise fit, the gated outliers, what the log reader
-/// did.
-struct MapInput {
-    data: Dataset,
-    noise_fit: Option<pqrm::calibrate::NoiseFit>,
-    gated: Option<pqrm::calibrate::Gated>,
-    log_read: Option<qrm_log::Recording>,
-}
-
-/// `qrm map`.
+/// `qrm map`: the flags become a `studies::mapping::MapJob` (stage two), which reads, maps
+/// and scores; here the progress, the files and the summary on stdout.
 pub fn map(a: MapArgs) -> Result<()> {
-    let calc = Calculus::resolve(&a.calculus)
-        .with_context(|| format!("loading calculus `{}`", a.calculus))?;
-    let mut config = PqrmConfig {
-        samples: a.samples,
-        floor: a.floor,
-        // resolved below, once the recording is read (`--orderings auto` depends on it)
-        orderings: Orderings::All,
-        seed: a.seed,
-        sensor: pqrm::sensor::SensorModel::parse(&a.sensor)?,
-        temper: 1.0,
-    };
-    config.validate()?;
-    let temper = TemperChoice::parse(&a.temper).context("--temper")?;
-    let read = read_for_map(&a)?;
-    let data = &read.data;
-    // One choice for the whole recording, so that per-robot maps can be merged.
-    let possible = crate::args::possible_ordered_sets(&data.scans);
-    config.orderings = a.orderings.resolve(possible);
-    if a.orderings == OrderingsArg::Auto && config.orderings == Orderings::Canonical {
+    let job = map_job(&a)?;
+    let warn = |w: String| eprintln!("warning: {w}");
+    let input = job.read(&warn)?;
+    if a.orderings == OrderingsArg::Auto && input.orderings == Orderings::Canonical {
         eprintln!(
-            "note: the recording could give {possible} ordered landmark sets (more than {}); \
+            "note: the recording could give {} ordered landmark sets (more than {}); \
              recording one ordering per unordered set, the other five derived on reading \
              (--orderings all to record all six)",
-            OrderingsArg::AUTO_CANONICAL_ABOVE
+            input.possible_sets,
+            OrderingsChoice::AUTO_CANONICAL_ABOVE
         );
     }
-    let extra = read_summary(&read);
     // Written into a staging directory, moved into place only when all is done: a
     // failure or Ctrl-C leaves nothing a user could take for a result.
     let stage = Staging::new(&a.out)?;
-    let out_dir = stage.path().to_path_buf();
-    let settings = (config, temper, a.map_format);
     let summary = if a.per_robot {
-        let robots: std::collections::BTreeSet<u32> = data.scans.iter().map(|s| s.robot).collect();
         let mut all = serde_json::Map::new();
-        for r in robots {
-            let dir = out_dir.join(format!("robot{r}"));
-            std::fs::create_dir_all(&dir).with_context(|| format!("creating {}", dir.display()))?;
-            let one = Dataset {
-                scans: data
-                    .scans
-                    .iter()
-                    .filter(|s| s.robot == r)
-                    .cloned()
-                    .collect(),
-                truth: data.truth.clone(),
-                skipped: 0,
-            };
-            let label = format!("mapping robot {r}");
-            let s = map_into(&dir, &one, &calc, settings, &extra, &label)?;
+        for r in input.robots() {
+            let dir = stage.path().join(format!("robot{r}"));
+            let one = input.of_robot(r);
+            let s = map_into(&dir, &job, &input, &one, &format!("mapping robot {r}"))?;
             all.insert(format!("robot{r}"), s);
         }
         serde_json::Value::Object(all)
     } else {
-        map_into(&out_dir, data, &calc, settings, &extra, "mapping")?
+        map_into(stage.path(), &job, &input, &input.data, "mapping")?
     };
     // Committed before printing: a closed pipe must not lose the result.
     stage.commit()?;
@@ -142,197 +103,66 @@ pub fn map(a: MapArgs) -> Result<()> {
     Ok(())
 }
 
-/// The recording `qrm map` maps: read in its form (the loaders' errors name the file and
-/// line, or topic, message and field), with its truth, gated, restricted to `--robots`.
-fn read_for_map(a: &MapArgs) -> Result<MapInput> {
-    let (noise, noise_fit) = if a.format == InputFormat::Mcap {
-        (RangeBearingNoise::MRCLAM, None)
-    } else {
-        resolve_noise(a.format, &a.input, &a.noise)?
+/// Stage two of `qrm map`'s parsing: the job, every value checked before work.
+fn map_job(a: &MapArgs) -> Result<MapJob> {
+    let calculus = Calculus::resolve(&a.calculus)
+        .with_context(|| format!("loading calculus `{}`", a.calculus))?;
+    let config = PqrmConfig {
+        samples: a.samples,
+        floor: a.floor,
+        // resolved once the recording is read (`--orderings auto` depends on it)
+        orderings: Orderings::All,
+        seed: a.seed,
+        sensor: pqrm::sensor::SensorModel::parse(&a.sensor)?,
+        temper: 1.0,
     };
-    let mut log_read = None;
-    let mut data = if a.format == InputFormat::Mcap {
-        let mut options = qrm_log::ReadOptions {
-            topics: a.topic.clone(),
-            range_max: a.range_max,
-            allow_truncated: a.allow_truncated,
-            ..Default::default()
-        };
-        options.lidar.sigma = a.lidar_sigma;
-        let r = qrm_log::read_mcap(&a.input, &options)?;
-        if let Some(d) = &r.damage {
-            eprintln!(
-                "warning: {} is damaged; read up to its last readable chunk ({d})",
-                a.input.display()
-            );
-        }
-        let data = r.dataset.clone();
-        log_read = Some(r);
-        data
-    } else {
-        ensure!(
-            a.topic.is_empty() && a.range_max.is_none() && !a.allow_truncated,
-            "--topic, --range-max and --allow-truncated are for --format mcap"
-        );
-        load_dataset(a.format, &a.input, noise)?
+    config.validate()?;
+    let mut log = qrm_log::ReadOptions {
+        topics: a.topic.clone(),
+        range_max: a.range_max,
+        allow_truncated: a.allow_truncated,
+        ..Default::default()
     };
-    if let Some(t) = &a.truth {
-        data.truth = Some(read_truth_csv(t)?);
-    }
-    let mut gated = None;
-    if a.gate {
-        let fit = match &noise_fit {
-            Some(f) => *f,
-            None => pqrm::calibrate::fit_noise(&data).context("fitting the noise for --gate")?,
-        };
-        let (kept, g) = pqrm::calibrate::gate_outliers(&data, &fit, 3.0);
-        data.scans = kept.scans;
-        gated = Some(g);
-    }
-    if !a.robots.is_empty() {
-        let present: std::collections::BTreeSet<u32> = data.scans.iter().map(|s| s.robot).collect();
-        if let Some(r) = a.robots.iter().find(|r| !present.contains(r)) {
-            bail!(
-                "--robots: robot {r} has no scans in {} (robots present: {present:?})",
-                a.input.display()
-            );
-        }
-        data.scans.retain(|s| a.robots.contains(&s.robot));
-    }
-    Ok(MapInput {
-        data,
-        noise_fit,
-        gated,
-        log_read,
+    log.lidar.sigma = a.lidar_sigma;
+    Ok(MapJob {
+        format: a.format.into(),
+        input: a.input.clone(),
+        truth: a.truth.clone(),
+        noise: a.noise.request(),
+        log,
+        gate: a.gate,
+        robots: a.robots.clone(),
+        calculus,
+        config,
+        orderings: a.orderings.into(),
+        temper: TemperChoice::parse(&a.temper).context("--temper")?,
+        map_format: a.map_format.into(),
     })
-}
-
-/// What the reading did, for every summary: the noise fit, the outliers gated, the log's
-/// topics and where its landmarks came from.
-fn read_summary(read: &MapInput) -> serde_json::Map<String, serde_json::Value> {
-    let mut extra = serde_json::Map::new();
-    if let Some(fit) = &read.noise_fit {
-        extra.insert("noise_fit".into(), json!(fit));
-    }
-    if let Some(g) = &read.gated {
-        extra.insert("gated".into(), json!(g));
-    }
-    if let Some(r) = &read.log_read {
-        let used: Vec<_> = r
-            .topics
-            .iter()
-            .filter(|t| t.used)
-            .map(|t| json!({"topic": t.topic, "schema": t.schema, "messages": t.messages, "robot": t.robot}))
-            .collect();
-        extra.insert("topics".into(), json!(used));
-        extra.insert(
-            "landmarks_from".into(),
-            json!(if r.from_scans {
-                "lidar scans (extracted, recognised by triangles)"
-            } else {
-                "detections"
-            }),
-        );
-        extra.insert("damage".into(), json!(r.damage));
-    }
-    extra
-}
-
-/// The config to map `data` with: a fixed τ as given, or `auto` chosen from the data
-/// (`pqrm::temper`), with the evidence.
-fn resolve_temper(
-    data: &Dataset,
-    calc: &Calculus,
-    config: PqrmConfig,
-    temper: TemperChoice,
-    label: &str,
-) -> Result<(PqrmConfig, Option<pqrm::temper::TemperFit>)> {
-    match temper {
-        TemperChoice::Fixed(temper) => Ok((PqrmConfig { temper, ..config }, None)),
-        TemperChoice::Auto => {
-            let pb =
-                crate::progress::bar(2 * data.scans.len() as u64, &format!("{label}: choosing τ"));
-            let mut fits = pqrm::temper::fit_temper(
-                std::slice::from_ref(calc),
-                &data.scans,
-                config,
-                &pqrm::temper::TemperOptions::default(),
-                &|| pb.inc(1),
-            )
-            .context("choosing the tempering exponent (--temper auto)")?;
-            pb.finish_and_clear();
-            let fit = fits.remove(0);
-            eprintln!(
-                "{label}: τ = {:.3} chosen from held-out frames (log score {:.4} vs {:.4} at τ = 1)",
-                fit.chosen,
-                fit.chosen_score(),
-                fit.untempered_score().unwrap_or(f64::NAN)
-            );
-            Ok((
-                PqrmConfig {
-                    temper: fit.chosen,
-                    ..config
-                },
-                Some(fit),
-            ))
-        }
-    }
 }
 
 /// Maps `data` into `dir`: `map.json` (or `map.pqrm`) and `summary.json` (scored when the
 /// data has a truth).
 fn map_into(
     dir: &Path,
-    data: &Dataset,
-    calc: &Calculus,
-    (config, temper, map_format): (PqrmConfig, TemperChoice, MapFormatArg),
-    extra: &serde_json::Map<String, serde_json::Value>,
+    job: &MapJob,
+    input: &studies::mapping::MapInput,
+    data: &pqrm::loaders::Dataset,
     label: &str,
 ) -> Result<serde_json::Value> {
-    let (config, temper_fit) = resolve_temper(data, calc, config, temper, label)?;
-    let mut map = Pqrm::new(calc.clone(), config)?;
-    let start = Instant::now();
-    let pb = crate::progress::bar(data.scans.len() as u64, label);
-    for scan in &data.scans {
-        map.update(scan)?;
-        pb.inc(1);
-    }
+    std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+    let pb = crate::progress::Bar::new(0, label);
+    let mut mapped = job.map(input, data, &pb)?;
     pb.finish_and_clear();
-    let map_format = map_format.resolve(map.len());
-    let map_file = format!("map.{}", map_format.extension());
-    let saving = Instant::now();
-    map.save_as(&dir.join(&map_file), map_format)?;
-    let save_seconds = saving.elapsed().as_secs_f64();
-    let robots: std::collections::BTreeSet<u32> = data.scans.iter().map(|s| s.robot).collect();
-    let mut summary = json!({
-        "calculus": map.calculus().name(),
-        "n_scans": data.scans.len(),
-        "robots": robots,
-        "floor": config.floor,
-        "sensor": config.sensor,
-        "temper": config.temper,
-        "samples": config.samples,
-        "orderings": config.orderings,
-        "skipped_measurements": data.skipped,
-        "n_sets": map.len(),
-        "map_file": map_file,
-        "map_bytes_in_memory": map.heap_bytes(),
-        "save_seconds": save_seconds,
-        "mean_entropy": map.mean_entropy(),
-        "seconds": start.elapsed().as_secs_f64(),
-    });
-    let obj = summary.as_object_mut().context("summary is an object")?;
-    if let Some(fit) = &temper_fit {
-        obj.insert("temper_fit".into(), json!(fit));
+    if let Some(fit) = mapped.temper_fit() {
+        eprintln!(
+            "{label}: τ = {:.3} chosen from held-out frames (log score {:.4} vs {:.4} at τ = 1)",
+            fit.chosen,
+            fit.chosen_score(),
+            fit.untempered_score().unwrap_or(f64::NAN)
+        );
     }
-    for (k, v) in extra {
-        obj.insert(k.clone(), v.clone());
-    }
-    if let Some(truth) = &data.truth
-        && !map.is_empty()
-    {
-        score_into(obj, &evaluate(&map, truth)?);
-    }
+    mapped.save(dir)?;
+    let summary = serde_json::Value::Object(mapped.summary);
     write_atomic(
         &dir.join("summary.json"),
         serde_json::to_string_pretty(&summary)?.as_bytes(),
@@ -340,21 +170,9 @@ fn map_into(
     Ok(summary)
 }
 
-fn score_into(obj: &mut serde_json::Map<String, serde_json::Value>, m: &pqrm::MapMetrics) {
-    obj.insert("n_scored".into(), json!(m.n_scored));
-    obj.insert("error_rate".into(), json!(m.error_rate));
-    obj.insert(
-        "mean_neighbor_distance".into(),
-        json!(m.mean_neighbor_distance),
-    );
-    obj.insert("p_ml_mean".into(), json!(m.p_ml_mean));
-    obj.insert("top_n_error".into(), json!(m.top_n_error));
-    obj.insert("normalized_entropy".into(), json!(m.normalized_entropy));
-}
-
 /// `qrm pqrm calibrate`.
 fn calibrate(a: CalibrateArgs) -> Result<()> {
-    let data = load_dataset(a.format, &a.input, RangeBearingNoise::MRCLAM)?;
+    let data = studies::recording::read(a.format.into(), &a.input, RangeBearingNoise::MRCLAM)?;
     let fit = pqrm::calibrate::fit_noise(&data)
         .with_context(|| format!("fitting the noise of {}", a.input.display()))?;
     let z: Vec<f64> = pqrm::calibrate::residuals(&data, &fit)
@@ -431,7 +249,7 @@ fn merge(a: MergeArgs) -> Result<()> {
         && !merged.is_empty()
     {
         let obj = summary.as_object_mut().context("summary is an object")?;
-        score_into(obj, &evaluate(&merged, truth)?);
+        studies::mapping::score_into(obj, &evaluate(&merged, truth)?);
     }
     // binary for a `.pqrm` path, JSON otherwise; atomic either way
     merged

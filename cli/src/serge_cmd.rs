@@ -13,6 +13,7 @@ use studies::serge::learned_calculus::compose_table_json;
 
 use crate::output::{Staging, write_atomic, write_picture};
 use qrm_plot::{RegionPicture, region_map};
+use serge::learner::CalculusLearner;
 use serge::selection::TripletSelection;
 
 /// `qrm serge ...`.
@@ -229,29 +230,25 @@ fn study(a: StudyArgs) -> Result<()> {
 // learning a calculus from observations
 
 fn learn(a: LearnArgs) -> Result<()> {
-    let window = window4(&a.window)?;
-    let grid = Grid::new(window, a.grid, a.grid)?;
-    let scans = pqrm::loaders::read_csv(&a.input)?.scans;
-    // landmark sets seen together in enough frames, drawn with the seed, each in a random
-    // ordering (serge::selection's rule, as the SERGE study and the demo)
-    let frames = studies::recording::sightings(&scans);
-    let selection = TripletSelection {
-        min_frames: a.min_frames,
-        max_triplets: a.max_triplets,
-        seed: a.seed,
+    let learner = CalculusLearner {
+        selection: TripletSelection {
+            min_frames: a.min_frames,
+            max_triplets: a.max_triplets,
+            seed: a.seed,
+        },
+        samples: a.samples,
+        window: window4(&a.window)?,
+        cells: a.grid,
+        mu: a.mu,
+        sigma: a.sigma,
+        trials: a.trials,
     };
-    let selected = selection
-        .select(&frames)
+    let scans = pqrm::loaders::read_csv(&a.input)?.scans;
+    let start = Instant::now();
+    let (selected, map) = learner
+        .learn(&studies::recording::sightings(&scans))
         .with_context(|| format!("learning from {}", a.input.display()))?;
     let (triplets, obs) = (selected.triplets, selected.observations);
-    let beliefs = serge::learn::triplet_beliefs(&obs, triplets.len(), a.samples, a.seed)?;
-    let masses = CellMasses::compute(&beliefs, grid)?;
-    let mut params = SergeParams::new(a.mu.min(triplets.len()), a.sigma).seed(a.seed);
-    if let Some(t) = a.trials {
-        params = params.trials(t);
-    }
-    let start = Instant::now();
-    let map = Serge::new(&masses)?.run(&params)?;
     let calc = map.to_calculus(
         &a.name,
         &format!(

@@ -6,9 +6,12 @@
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result, bail};
-use studies::{AnyStudy, Ran, Report};
+use studies::{AnyStudy, Report};
 
-use crate::output::{CsvTable, Staging, write_atomic, write_picture};
+use studies::config::{from_toml, overlay, set_field, to_toml};
+use studies::shard::ShardFile;
+
+use crate::output::{Staging, write_atomic};
 
 /// `qrm study ...`.
 #[derive(Debug, clap::Subcommand)]
@@ -146,7 +149,12 @@ fn shard(a: &ShardArgs) -> Result<()> {
     let pb = crate::progress::Bar::new(0, &format!("{} shard {index}", study.name()));
     let value = study.run_shard(&config, index, &pb)?;
     pb.finish_and_clear();
-    let file = serde_json::json!({"study": study.name(), "index": index, "config": config, "shard": value});
+    let file = ShardFile {
+        config,
+        index,
+        shard: value,
+        study: study.name().to_owned(),
+    };
     write_atomic(out, serde_json::to_string(&file)?.as_bytes())?;
     outln!("wrote shard {index} of {n}: {}", out.display())?;
     Ok(())
@@ -158,24 +166,12 @@ fn aggregate(a: &AggregateArgs) -> Result<()> {
     for path in &a.shards {
         let text = qsr_core::text_file::read_text(path, qsr_core::text_file::MAX_INPUT_BYTES)
             .with_context(|| format!("reading {}", path.display()))?;
-        let file: serde_json::Value = serde_json::from_str(&text)
-            .with_context(|| format!("{}: not a shard file", path.display()))?;
-        if file["study"] != study.name() || file["config"] != config {
-            bail!(
-                "{}: a shard of another study or config (study {}, this run's: {})",
-                path.display(),
-                file["study"],
-                study.name()
-            );
-        }
-        let index = file["index"]
-            .as_u64()
-            .with_context(|| format!("{}: no shard index", path.display()))?;
-        shards.push((usize::try_from(index)?, file["shard"].clone()));
+        let file = ShardFile::read(&text, &path.display().to_string(), study.name(), &config)?;
+        shards.push((file.index, file.shard));
     }
     let stage = Staging::new(&a.out)?;
     let ran = study.aggregate(&config, shards)?;
-    write_run(stage.path(), &ran, None)?;
+    qrm_files::write_run(stage.path(), &ran, None)?;
     print_report(&ran.report)?;
     outln!("wrote {}", a.out.display())?;
     stage.commit()?;
@@ -190,81 +186,13 @@ fn config_of(a: &ConfigArgs) -> Result<(&'static dyn AnyStudy, serde_json::Value
     if let Some(path) = &a.config {
         let text = qsr_core::text_file::read_text(path, qsr_core::text_file::MAX_INPUT_BYTES)
             .with_context(|| format!("reading {}", path.display()))?;
-        let file: serde_json::Value = toml::from_str(&text)
-            .with_context(|| format!("{}: not a TOML config", path.display()))?;
-        overlay(&mut config, file);
+        overlay(&mut config, from_toml(&text, &path.display().to_string())?);
     }
     for s in &a.set {
-        set_field(&mut config, s)?;
+        set_field(&mut config, s).context("--set")?;
     }
     study.check(&config)?;
     Ok((study, config))
-}
-
-/// Replaces the fields of `base` that `top` has, table by table.
-fn overlay(base: &mut serde_json::Value, top: serde_json::Value) {
-    match (base, top) {
-        (serde_json::Value::Object(b), serde_json::Value::Object(t)) => {
-            for (k, v) in t {
-                match b.get_mut(&k) {
-                    Some(slot) if slot.is_object() && v.is_object() => overlay(slot, v),
-                    _ => {
-                        b.insert(k, v);
-                    }
-                }
-            }
-        }
-        (b, t) => *b = t,
-    }
-}
-
-/// Sets `key=value` (dotted key, TOML value or bare string) in a JSON config.
-fn set_field(config: &mut serde_json::Value, assignment: &str) -> Result<()> {
-    let Some((key, raw)) = assignment.split_once('=') else {
-        bail!("--set `{assignment}`: expected KEY=VALUE");
-    };
-    let (key, raw) = (key.trim(), raw.trim());
-    let value: serde_json::Value = toml::from_str::<toml::Table>(&format!("v = {raw}"))
-        .ok()
-        .and_then(|t| t.get("v").cloned())
-        .map_or_else(
-            || Ok(serde_json::Value::String(raw.to_owned())),
-            serde_json::to_value,
-        )?;
-    let mut node = config;
-    let parts: Vec<&str> = key.split('.').collect();
-    for (i, part) in parts.iter().enumerate() {
-        let Some(obj) = node.as_object_mut() else {
-            bail!("--set `{key}`: `{}` is not a table", parts[..i].join("."));
-        };
-        if !obj.contains_key(*part) {
-            let known: Vec<&String> = obj.keys().collect();
-            bail!("--set `{key}`: no field `{part}` (fields: {known:?})");
-        }
-        if i + 1 == parts.len() {
-            obj.insert((*part).to_owned(), value);
-            return Ok(());
-        }
-        node = obj.get_mut(*part).context("the field was just found")?;
-    }
-    bail!("--set `{assignment}`: empty key")
-}
-
-fn to_toml(v: &serde_json::Value) -> Result<String> {
-    // TOML has no null: a field left at `None` is left out and takes its default on reading.
-    fn strip(v: &serde_json::Value) -> serde_json::Value {
-        match v {
-            serde_json::Value::Object(o) => serde_json::Value::Object(
-                o.iter()
-                    .filter(|(_, x)| !x.is_null())
-                    .map(|(k, x)| (k.clone(), strip(x)))
-                    .collect(),
-            ),
-            serde_json::Value::Array(a) => serde_json::Value::Array(a.iter().map(strip).collect()),
-            x => x.clone(),
-        }
-    }
-    toml::to_string(&strip(v)).context("the config as TOML")
 }
 
 /// What a run prints on the terminal.
@@ -312,7 +240,11 @@ pub fn run_and_write(
     let ran = study.run(config, &pb)?;
     let seconds = t0.elapsed().as_secs_f64();
     pb.finish_and_clear();
-    write_run(stage.path(), &ran, Some(seconds))?;
+    qrm_files::write_run(
+        stage.path(),
+        &ran,
+        Some((seconds, rayon::current_num_threads())),
+    )?;
     let threads = rayon::current_num_threads();
     match shown {
         Shown::Tables => {
@@ -332,48 +264,6 @@ pub fn run_and_write(
     Ok(())
 }
 
-/// The files of a run: each table as CSV, each figure (SVG and PNG), each attachment,
-/// report.md (with the run time when it was measured here), config.toml. A name with a `/`
-/// (`hallway/cv`) goes into that subdirectory.
-pub fn write_run(dir: &Path, ran: &Ran, seconds: Option<f64>) -> Result<()> {
-    let report = &ran.report;
-    let place = |name: &str| -> Result<PathBuf> {
-        let path = dir.join(name);
-        if let Some(parent) = path.parent() {
-            std::fs::create_dir_all(parent)
-                .with_context(|| format!("creating {}", parent.display()))?;
-        }
-        Ok(path)
-    };
-    for t in &report.tables {
-        let (header, rows) = t.csv_records();
-        let mut csv = CsvTable::new(header)?;
-        for r in rows {
-            csv.row(r)?;
-        }
-        csv.write(&place(&format!("{}.csv", t.name))?)?;
-    }
-    for f in &report.figures {
-        write_picture(&place(&f.name)?, &qrm_plot::figure(f)?)?;
-    }
-    for a in &report.attachments {
-        write_atomic(&place(&a.name)?, a.bytes())?;
-    }
-    if let Some((name, text)) = &ran.output_file {
-        write_atomic(&dir.join(name), text.as_bytes())?;
-    }
-    let mut md = report.to_markdown();
-    if let Some(s) = seconds {
-        md.push_str(&format!(
-            "\nRun in {s:.1} s on {} threads.\n",
-            rayon::current_num_threads()
-        ));
-    }
-    write_atomic(&dir.join("report.md"), md.as_bytes())?;
-    write_atomic(&dir.join("config.toml"), to_toml(&ran.config)?.as_bytes())?;
-    Ok(())
-}
-
 /// The report's tables and claims on the terminal.
 pub fn print_report(report: &Report) -> Result<()> {
     for t in report.tables.iter().filter(|t| t.in_report) {
@@ -389,25 +279,4 @@ pub fn print_report(report: &Report) -> Result<()> {
         )?;
     }
     Ok(())
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn set_takes_toml_values_dotted_keys_and_bare_words() {
-        let mut c = serde_json::json!({"pairs": 400, "trial": "all", "schedule": {"fallbacks": 1}});
-        set_field(&mut c, "pairs=12").unwrap();
-        set_field(&mut c, "trial=occlusion").unwrap();
-        set_field(&mut c, "schedule.fallbacks = 0").unwrap();
-        assert_eq!(
-            c,
-            serde_json::json!({"pairs": 12, "trial": "occlusion", "schedule": {"fallbacks": 0}})
-        );
-        let e = set_field(&mut c, "pears=3").unwrap_err().to_string();
-        assert!(e.contains("no field `pears`") && e.contains("pairs"), "{e}");
-        assert!(set_field(&mut c, "pairs").is_err());
-        assert!(set_field(&mut c, "pairs.x=1").is_err());
-    }
 }

@@ -223,7 +223,11 @@ fn shards_written_anywhere_aggregate_into_the_run() {
     a.extend(["--out", agg.to_str().unwrap(), "--shard"]);
     a.extend(files.iter().map(String::as_str));
     let o = common::qrm(&a, "");
-    assert!(String::from_utf8_lossy(&o.stderr).contains("another study or config"));
+    let e = String::from_utf8_lossy(&o.stderr).to_string();
+    assert!(
+        e.contains("another config of `monte-carlo`") && e.contains("`trials`"),
+        "{e}"
+    );
     let mut a = vec!["study", "aggregate", "monte-carlo"];
     a.extend(config);
     a.extend(["--out", agg.to_str().unwrap(), "--shard", &files[0]]);

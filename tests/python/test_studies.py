@@ -170,6 +170,35 @@ def test_the_demo_runs_from_python_with_the_files_of_qrm_demo(qrm_bin, tmp_path)
     assert (out / "learned_calculus.json").read_text() == files["learned_calculus.json"]["text"]
     with pytest.raises(qrm.InvalidInput, match="nav_range"):
         qrm.studies.run("demo", {"seed": 1, "nav_range": -1.0})
+    # issue 14 §2: saved from Python, the run is the directory `qrm demo` wrote, file for
+    # file and byte for byte (figures drawn by the same code), but report.md's line with the
+    # run time, which only a run measured on the command line has
+    saved = tmp_path / "saved"
+    written = qrm.studies.save(run, saved)
+    cli_files = sorted(str(p.relative_to(out)) for p in out.rglob("*") if p.is_file())
+    assert written == cli_files and "demo.png" in written and "report.md" in written
+    for name in written:
+        ours, theirs = (saved / name).read_bytes(), (out / name).read_bytes()
+        if name == "report.md":
+            timing = [l for l in theirs.decode().splitlines() if l.startswith("Run in ")]
+            assert len(timing) == 1
+            theirs = theirs.replace(("\n" + timing[0] + "\n").encode(), b"")
+        assert ours == theirs, name
+
+
+def test_save_refuses_an_output_that_is_not_the_studys(small_run, tmp_path):
+    # a wrong implementation would write whatever it is given: the report is made again from
+    # the typed output, so an output of the wrong shape is refused and nothing is written
+    broken = dict(small_run)
+    broken["output"] = {"records": "not a list"}
+    with pytest.raises(qrm.InvalidInput, match="not an output of `table-4-1`"):
+        qrm.studies.save(broken, tmp_path / "broken")
+    assert not (tmp_path / "broken").exists()
+    assert list(tmp_path.iterdir()) == []
+    # a file where the directory should be is an OSError naming it
+    (tmp_path / "file").write_text("x")
+    with pytest.raises(OSError, match="is a file"):
+        qrm.studies.save(small_run, tmp_path / "file")
 
 
 def test_the_reasoning_study_runs_from_python_as_on_the_command_line(mrclam_dir, qrm_bin, tmp_path):

@@ -1,11 +1,8 @@
 //! `qrm.BinaryCalculus`: a thin wrapper of `qsr_core::binary` (OPRA-m, STAR-m), and the
 //! closure of binary networks.
 
-use std::collections::BTreeMap;
-
 use numpy::{IntoPyArray, PyArray1};
 use pyo3::prelude::*;
-use qsr_core::StateId;
 use qsr_core::binary::{BinaryNetwork, close_binary};
 
 use crate::errors::{invalid, qsr};
@@ -15,10 +12,6 @@ use crate::errors::{invalid, qsr};
 #[derive(Clone)]
 pub(crate) struct BinaryCalculus {
     pub(crate) inner: qsr_core::binary::BinaryCalculus,
-}
-
-fn labels(c: &qsr_core::binary::BinaryCalculus, set: &[StateId]) -> Vec<String> {
-    set.iter().map(|s| c.label(*s).to_owned()).collect()
 }
 
 #[pymethods]
@@ -76,28 +69,17 @@ impl BinaryCalculus {
     }
 
     /// The composition table {r: {s: [t, ...]}} of {A:B} ∘ {B:C} → {A:C} (exact).
-    fn compose(&self, py: Python<'_>) -> PyResult<BTreeMap<String, BTreeMap<String, Vec<String>>>> {
+    fn compose(&self, py: Python<'_>) -> PyResult<qsr_core::table_text::LabelledCompose> {
         let c = &self.inner;
         let table = crate::pool::detach(py, || c.compose_table().cloned()).map_err(qsr)?;
-        Ok(c.states()
-            .map(|r| {
-                (
-                    c.label(r).to_owned(),
-                    c.states()
-                        .map(|s| (c.label(s).to_owned(), labels(c, table.get(r, s))))
-                        .collect(),
-                )
-            })
-            .collect())
+        Ok(table.labelled(c.labels()))
     }
 
     /// The converse table {r: [t]}: X r Y ⇒ Y t X.
-    fn converse(&self, py: Python<'_>) -> BTreeMap<String, Vec<String>> {
+    fn converse(&self, py: Python<'_>) -> qsr_core::table_text::LabelledRows {
         let c = &self.inner;
         let table = crate::pool::detach(py, || c.converse().clone());
-        c.states()
-            .map(|r| (c.label(r).to_owned(), labels(c, table.get(r))))
-            .collect()
+        table.labelled(c.labels())
     }
 
     /// Conceptual neighbours: {"states", "adjacent", "distance"}.

@@ -1,7 +1,5 @@
 //! `qrm.Calculus`: a thin wrapper of `qsr_core::Calculus`.
 
-use std::collections::BTreeMap;
-
 use numpy::{IntoPyArray, PyArray1, PyArrayMethods, PyReadonlyArray2, PyUntypedArrayMethods};
 use pyo3::prelude::*;
 use qsr_core::{ComposeOptions, Permutation, StateId};
@@ -147,10 +145,6 @@ fn annotate(i: usize, e: qsr_core::QsrError) -> qsr_core::QsrError {
         },
         other => other,
     }
-}
-
-fn labels(c: &qsr_core::Calculus, set: &[StateId]) -> Vec<String> {
-    set.iter().map(|s| c.label(*s).to_owned()).collect()
 }
 
 #[pymethods]
@@ -364,7 +358,7 @@ impl Calculus {
         &self,
         py: Python<'_>,
         generic: bool,
-    ) -> PyResult<BTreeMap<String, BTreeMap<String, Vec<String>>>> {
+    ) -> PyResult<qsr_core::table_text::LabelledCompose> {
         let table = crate::pool::detach(py, || {
             if generic {
                 self.inner.compose_table_with(&ComposeOptions::generic())
@@ -373,17 +367,7 @@ impl Calculus {
             }
         })
         .map_err(qsr)?;
-        let c = &self.inner;
-        Ok(c.states()
-            .map(|r| {
-                (
-                    c.label(r).to_owned(),
-                    c.states()
-                        .map(|s| (c.label(s).to_owned(), labels(c, table.get(r, s))))
-                        .collect(),
-                )
-            })
-            .collect())
+        Ok(table.labelled(self.inner.labels()))
     }
 
     /// A permutation table {r: [t, ...]}; `op` is inverse, shortcut, shortcut-inverse,
@@ -394,14 +378,11 @@ impl Calculus {
         py: Python<'_>,
         op: &str,
         generic: bool,
-    ) -> PyResult<BTreeMap<String, Vec<String>>> {
+    ) -> PyResult<qsr_core::table_text::LabelledRows> {
         let op: Permutation = op.parse().map_err(qsr)?;
         let table =
             crate::pool::detach(py, || self.inner.permutation_with(op, !generic)).map_err(qsr)?;
-        let c = &self.inner;
-        Ok(c.states()
-            .map(|r| (c.label(r).to_owned(), labels(c, table.get(r))))
-            .collect())
+        Ok(table.labelled(self.inner.labels()))
     }
 
     /// For each state of this calculus, the state of `coarse` it merges into (int array).

@@ -231,3 +231,15 @@ pub(crate) fn study_err(e: studies::StudyError) -> PyErr {
         _ => QrmError::new_err(msg),
     }
 }
+
+/// The Python exception for an error writing results: the file system → `IoError`; a
+/// config or figure that cannot be written → as the study's errors.
+pub(crate) fn files_err(e: qrm_files::FileError) -> PyErr {
+    use qrm_files::FileError as F;
+    let msg = chain(&e);
+    match e {
+        F::Study(inner) => study_err(inner),
+        F::Io { .. } | F::Path(_) => io_error(msg),
+        _ => QrmError::new_err(msg),
+    }
+}

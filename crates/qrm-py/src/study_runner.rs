@@ -3,8 +3,7 @@
 
 use pyo3::prelude::*;
 
-use crate::errors::invalid;
-use crate::errors::study_err;
+use crate::errors::{files_err, invalid, study_err};
 
 /// `[(name, about), ...]` of every study.
 #[pyfunction]
@@ -45,7 +44,7 @@ pub(crate) fn studies_run(
     study.check(&config).map_err(study_err)?;
     let ran = crate::pool::watched(py, progress, move |watch| study.run(&config, watch))?
         .map_err(study_err)?;
-    ran_json(ran)
+    ran_json(name, ran)
 }
 
 fn parse_config(name: &str, config: &str) -> PyResult<serde_json::Value> {
@@ -102,13 +101,60 @@ pub(crate) fn studies_aggregate(
         })
         .collect::<PyResult<Vec<_>>>()?;
     let ran = study.aggregate(&config, shards).map_err(study_err)?;
-    ran_json(ran)
+    ran_json(name, ran)
 }
 
-fn ran_json(ran: studies::Ran) -> PyResult<String> {
+fn ran_json(name: &str, ran: studies::Ran) -> PyResult<String> {
     let report = serde_json::to_value(&ran.report).map_err(|e| invalid(e.to_string()))?;
-    Ok(
-        serde_json::json!({"config": ran.config, "output": ran.output, "report": report})
-            .to_string(),
-    )
+    Ok(serde_json::json!({
+        "study": name,
+        "config": ran.config,
+        "output": ran.output,
+        "report": report,
+    })
+    .to_string())
+}
+
+/// Saves a run of study `name` — its `config` and `output` (JSON), the report made again
+/// from them — into directory `out` as `qrm study run` writes it (tables as CSV, figures as
+/// SVG and PNG, attachments, report.md, config.toml), whole or not at all. Returns the
+/// paths written, relative to `out`.
+#[pyfunction]
+pub(crate) fn studies_save(
+    py: Python<'_>,
+    name: &str,
+    config: &str,
+    output: &str,
+    out: std::path::PathBuf,
+) -> PyResult<Vec<String>> {
+    let study = studies::find(name).map_err(study_err)?;
+    let config = parse_config(name, config)?;
+    let output: serde_json::Value = serde_json::from_str(output)
+        .map_err(|e| invalid(format!("output of `{name}` is not JSON: {e}")))?;
+    crate::pool::detach(py, || {
+        let ran = study.rebuild(&config, output).map_err(study_err)?;
+        let stage = qrm_files::Staging::new(&out).map_err(files_err)?;
+        qrm_files::write_run(stage.path(), &ran, None).map_err(files_err)?;
+        let written = files_under(stage.path());
+        stage.commit().map_err(files_err)?;
+        Ok(written)
+    })
+}
+
+/// Every file under `dir`, relative to it, sorted.
+fn files_under(dir: &std::path::Path) -> Vec<String> {
+    let mut stack = vec![dir.to_path_buf()];
+    let mut files = Vec::new();
+    while let Some(d) = stack.pop() {
+        for entry in std::fs::read_dir(&d).into_iter().flatten().flatten() {
+            let path = entry.path();
+            if path.is_dir() {
+                stack.push(path);
+            } else if let Ok(rel) = path.strip_prefix(dir) {
+                files.push(rel.to_string_lossy().into_owned());
+            }
+        }
+    }
+    files.sort();
+    files
 }

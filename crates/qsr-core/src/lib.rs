@@ -81,6 +81,7 @@ pub mod reason;
 mod render;
 mod spec;
 pub mod stats;
+pub mod table_text;
 pub mod text_file;
 
 pub use builtin::{BUILTIN_NAMES, BUILTIN_SPECS, POINT_CALCULI, builtin_spec};

@@ -57,6 +57,7 @@ mod error;
 mod grid;
 mod init;
 pub mod learn;
+pub mod learner;
 mod map;
 pub mod selection;
 #[allow(clippy::module_inception)]

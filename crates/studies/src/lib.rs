@@ -20,7 +20,9 @@
 //! | [`pqrm::monte_carlo`] | §2.3.1, Figs 2.6–2.11 | PQRM map quality vs noise, six calculi (the run is `pqrm::study`) |
 //! | [`pqrm::real_data`] | §2.3.2, Figs 2.14–2.16 | PQRM on a surveyed recording (MRCLAM): baselines, calibration, tempering, sensor models, many robots |
 //! | [`pqrm::reasoning`] | new (§3.3.2) | inference of hidden and never-seen triplets by composition, consistency checks, on a recording with surveyed landmarks |
-//! | [`recording`] | — | a recording in any form qrm reads (CSV, MRCLAM, g2o, MCAP) |
+//! | [`recording`] | — | a recording in any form qrm reads (CSV, MRCLAM, g2o, MCAP), its noise given or fitted |
+//! | [`mapping`] | — | a user's recording mapped (`qrm map`): read, gated, τ chosen, mapped, scored |
+//! | [`config`] | — | a config as a user edits it: TOML, a file's fields over the built-in, `key=value` |
 //! | [`qlink::table_4_1`] | §4.4.1, Table 4.1, Figs 4.6–4.7 | navigation failure rate vs sensor range and landmark size |
 //! | [`qlink::field`] | §4.4.2, Table 4.2 | the lidar-only field-site experiment in simulation |
 //! | [`serge::datasets`] | §3.4 | the well-separated, lab and hallway datasets |
@@ -38,8 +40,10 @@
 //! `Cancelled`, and the wrapped errors of the crates a study drives (`Qlink`, `Serge`,
 //! `Pqrm`, `Calculus`, `Sim`, `Log`).
 
+pub mod config;
 pub mod demo;
 mod error;
+pub mod mapping;
 pub mod pqrm;
 pub mod qlink;
 pub mod recording;

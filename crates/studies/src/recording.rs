@@ -87,3 +87,110 @@ pub fn sightings(scans: &[pqrm::Scan]) -> Vec<Vec<serge::selection::Sighting>> {
         })
         .collect()
 }
+
+/// Where a range-bearing recording's noise comes from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum NoiseMode {
+    /// Fitted from the recording itself ([`pqrm::calibrate::fit_noise`]).
+    Auto,
+    /// The given standard deviations, else MRCLAM's.
+    Fixed,
+}
+
+/// The range-bearing noise a user asks for: a mode, standard deviations, or neither. Without
+/// a mode a given σ means fixed (explicit values win) and otherwise MRCLAM is fitted; the
+/// other forms carry their own covariances and take the fixed noise.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
+pub struct NoiseRequest {
+    /// `auto` or `fixed`; `None`: as said above.
+    pub mode: Option<NoiseMode>,
+    /// Range noise (m).
+    pub sigma_range: Option<f64>,
+    /// Bearing noise (rad).
+    pub sigma_bearing: Option<f64>,
+}
+
+/// The noise a recording is read with, and how it was chosen.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ResolvedNoise {
+    /// What the loader uses.
+    pub noise: RangeBearingNoise,
+    /// The fit, when the noise was fitted.
+    pub fit: Option<pqrm::calibrate::NoiseFit>,
+}
+
+impl NoiseRequest {
+    /// The noise to read `input` (of form `format`) with. A fit nobody asked for that fails (a
+    /// recording too short) keeps the fixed noise, and `warn` is told why; `mode: auto` asked
+    /// for it, so there it is an error.
+    ///
+    /// # Errors
+    /// [`StudyError::InvalidParameter`] for `auto` on a form that is not range-bearing or
+    /// beside given σs; the loader's errors; the fit's when `auto` was asked for.
+    pub fn resolve(
+        &self,
+        format: RecordingFormat,
+        input: &Path,
+        warn: &dyn Fn(String),
+    ) -> Result<ResolvedNoise> {
+        let fixed = RangeBearingNoise {
+            sigma_range: self
+                .sigma_range
+                .unwrap_or(RangeBearingNoise::MRCLAM.sigma_range),
+            sigma_bearing: self
+                .sigma_bearing
+                .unwrap_or(RangeBearingNoise::MRCLAM.sigma_bearing),
+        };
+        let given = self.sigma_range.is_some() || self.sigma_bearing.is_some();
+        let fixed_only = ResolvedNoise {
+            noise: fixed,
+            fit: None,
+        };
+        let mode = self
+            .mode
+            .unwrap_or(if given || format != RecordingFormat::Mrclam {
+                NoiseMode::Fixed
+            } else {
+                NoiseMode::Auto
+            });
+        if mode == NoiseMode::Fixed {
+            return Ok(fixed_only);
+        }
+        if format != RecordingFormat::Mrclam {
+            return Err(StudyError::InvalidParameter(
+                "--noise auto fits a range-bearing sensor: --format mrclam (the other formats \
+                 carry their own covariances; `qrm pqrm calibrate` reports a fit for any)"
+                    .into(),
+            ));
+        }
+        if given {
+            return Err(StudyError::InvalidParameter(
+                "--noise auto fits σ_r and σ_b; drop --sigma-range/--sigma-bearing or say \
+                 --noise fixed"
+                    .into(),
+            ));
+        }
+        match pqrm::calibrate::fit_noise(&read(format, input, fixed)?) {
+            Ok(fit) => Ok(ResolvedNoise {
+                noise: RangeBearingNoise {
+                    sigma_range: fit.sigma_range,
+                    sigma_bearing: fit.sigma_bearing,
+                },
+                fit: Some(fit),
+            }),
+            Err(e) if self.mode.is_none() => {
+                warn(format!(
+                    "{}: the noise cannot be fitted ({e}); using σ_r = {} m, σ_b = {} rad",
+                    input.display(),
+                    fixed.sigma_range,
+                    fixed.sigma_bearing
+                ));
+                Ok(fixed_only)
+            }
+            Err(e) => Err(StudyError::InvalidParameter(format!(
+                "fitting the noise (--noise auto): {e}"
+            ))),
+        }
+    }
+}

@@ -157,6 +157,12 @@ pub trait AnyStudy: Sync {
         config: &serde_json::Value,
         shards: Vec<(usize, serde_json::Value)>,
     ) -> Result<Ran>;
+    /// The run a config and its output make, report and all — what a front end saves from a
+    /// run it holds as JSON (Python's `qrm.studies.save`): the same files as the run itself.
+    ///
+    /// # Errors
+    /// As [`AnyStudy::check`]; an output that is not the study's.
+    fn rebuild(&self, config: &serde_json::Value, output: serde_json::Value) -> Result<Ran>;
 }
 
 /// The [`AnyStudy`] of `S`.
@@ -242,6 +248,13 @@ impl<S: Study> AnyStudy for Registered<S> {
             })
             .collect::<Result<Vec<_>>>()?;
         let output = S::aggregate(&c, shards)?;
+        Ran::of::<S>(&c, &output)
+    }
+    fn rebuild(&self, config: &serde_json::Value, output: serde_json::Value) -> Result<Ran> {
+        let c = read::<S>(config)?;
+        let output: S::Output = serde_json::from_value(output).map_err(|e| {
+            StudyError::InvalidParameter(format!("not an output of `{}`: {e}", S::NAME))
+        })?;
         Ran::of::<S>(&c, &output)
     }
 }

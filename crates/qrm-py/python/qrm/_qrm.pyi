@@ -1,4 +1,5 @@
 """Type stubs of the native module `qrm._qrm` (import `qrm`, not this)."""
+import os
 from typing import Any, Callable, Union, Dict, List, Optional, Tuple, final
 
 import numpy as np
@@ -40,6 +41,7 @@ __all__ = [
     "studies_shards",
     "studies_run_shard",
     "studies_aggregate",
+    "studies_save",
     "worker_threads",
     "reason_close",
     "reason_scenario",
@@ -276,3 +278,4 @@ def studies_run(
 def studies_shards(name: str, config: str) -> int: ...
 def studies_run_shard(name: str, config: str, index: int, progress: _Callback = None) -> str: ...
 def studies_aggregate(name: str, config: str, shards: List[Tuple[int, str]]) -> str: ...
+def studies_save(name: str, config: str, output: str, out: Union[str, os.PathLike[str]]) -> List[str]: ...

@@ -9,23 +9,25 @@ on the command line (the studies themselves are in the Rust `studies` crate).
     >>> run = qrm.studies.run("table-4-1", cfg)        # doctest: +SKIP
     >>> [c["verdict"] for c in run["report"]["claims"]]  # doctest: +SKIP
 
-A run returns `{"config", "output", "report"}`: the config it ran (every field filled in),
+A run returns `{"study", "config", "output", "report"}`: the study's name, the config it ran (every field filled in),
 the study's output (records and summaries) and its report — tables (each cell with its CSV
 field and its text), claims set beside the thesis's with computed verdicts, and the data of
 its figures, and the files it writes beside them (`attachments`: the demo's `summary.json`,
-learned calculus and `run.mcap` log, whose bytes are in `data`).
+learned calculus and `run.mcap` log, whose bytes are in `data`). `save(run, dir)` writes it
+as `qrm study run` does: tables as CSV, figures as SVG and PNG, report.md.
 """
 
 from __future__ import annotations
 
 import base64
 import json
-from typing import Any, Dict, List, Mapping, Optional, Tuple
+import os
+from typing import Any, Dict, List, Mapping, Optional, Tuple, Union
 
 from . import _qrm, types
 from . import _progress_callback, Progress  # noqa: F401  (re-used, not re-exported)
 
-__all__ = ["available", "config", "run", "table_frame"]
+__all__ = ["available", "config", "run", "save", "table_frame"]
 
 
 def available() -> List[Tuple[str, str]]:
@@ -54,6 +56,19 @@ def run(
     the study's units of work (navigations, trials, folds)."""
     text = None if config is None else json.dumps(dict(config))
     return _as_run(_qrm.studies_run(name, text, quick, seed, progress=_progress_callback(progress)))
+
+
+def save(run: types.StudyRun, out: Union[str, "os.PathLike[str]"]) -> List[str]:
+    """Writes `run` (as `run` or `qrm.distributed.run` returned it) into directory `out` as
+    `qrm study run NAME --out DIR` does: each table as CSV, each figure as SVG and PNG, the
+    attachments, the study's output file, report.md and config.toml — the same bytes, but
+    report.md's line with the run time, which only a run measured there has. The report is
+    made again from the run's config and output, so a run edited by hand is refused if its
+    output no longer fits the study. Written whole or not at all; returns the files written,
+    relative to `out`."""
+    return _qrm.studies_save(
+        run["study"], json.dumps(run["config"]), json.dumps(run["output"]), os.fspath(out)
+    )
 
 
 def _as_run(text: str) -> types.StudyRun:

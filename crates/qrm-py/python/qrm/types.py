@@ -655,6 +655,7 @@ class StudyRun(TypedDict):
     """A run of `qrm.studies.run`: the config it ran, its output (the study's records and
     summaries) and its report."""
 
+    study: str
     config: Dict[str, Any]
     output: Dict[str, Any]
     report: Report

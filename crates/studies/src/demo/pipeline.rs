@@ -6,9 +6,8 @@ use std::collections::{BTreeMap, BTreeSet};
 use pqrm::{LandmarkId, Observation, Pqrm, PqrmConfig, Scan};
 use qlink::{Controller, ControllerKind, Layer, LinkGraph, NavConfig, QualitativeMap};
 use qsr_core::Calculus;
-use serge::learn::triplet_beliefs;
+use serge::learner::CalculusLearner;
 use serge::selection::TripletSelection;
-use serge::{CellMasses, Grid, Serge, SergeParams};
 
 use crate::error::{Result, StudyError};
 
@@ -126,22 +125,26 @@ const LEARN_TRIPLETS: usize = 30;
 /// # Errors
 /// SERGE's.
 pub fn learn_calculus(scans: &[Scan], seed: u64) -> Result<Option<Calculus>> {
-    let frames = crate::recording::sightings(scans);
-    let selection = TripletSelection {
-        min_frames: LEARN_MIN_FRAMES,
-        max_triplets: LEARN_TRIPLETS,
-        seed,
+    let learner = CalculusLearner {
+        selection: TripletSelection {
+            min_frames: LEARN_MIN_FRAMES,
+            max_triplets: LEARN_TRIPLETS,
+            seed,
+        },
+        samples: 1000,
+        cells: 48,
+        ..CalculusLearner::new(6, 2.0, seed)
     };
-    let Ok(selected) = selection.select(&frames) else {
+    let Ok(selected) = learner
+        .selection
+        .select(&crate::recording::sightings(scans))
+    else {
         return Ok(None);
     };
-    let n = selected.triplets.len();
-    if n < 2 {
+    if selected.triplets.len() < 2 {
         return Ok(None);
     }
-    let beliefs = triplet_beliefs(&selected.observations, n, 1000, seed)?;
-    let masses = CellMasses::compute(&beliefs, Grid::new([-3.0, 3.0, -2.5, 3.5], 48, 48)?)?;
-    let map = Serge::new(&masses)?.run(&SergeParams::new(6.min(n), 2.0).seed(seed))?;
+    let map = learner.learn_from(&selected)?;
     Ok(Some(map.to_calculus(
         "demo-learned",
         "learned by SERGE from the demo's mapping drive",

@@ -1,0 +1,165 @@
+//! An output directory, whole or not at all.
+
+use std::path::{Path, PathBuf};
+use std::sync::{Mutex, OnceLock};
+
+use crate::{FileError, Result};
+
+/// Staging directories of this process not yet committed: what [`remove_unfinished`] removes
+/// when the process is stopped.
+fn active() -> &'static Mutex<Vec<PathBuf>> {
+    static ACTIVE: OnceLock<Mutex<Vec<PathBuf>>> = OnceLock::new();
+    ACTIVE.get_or_init(Default::default)
+}
+
+/// Removes the staging directories of every [`Staging`] of this process not yet committed, and
+/// returns them: what an interrupt handler calls before exiting (a `Drop` does not run then).
+#[must_use = "say whether anything was removed"]
+pub fn remove_unfinished() -> Vec<PathBuf> {
+    let dirs: Vec<PathBuf> = active().lock().map(|l| l.clone()).unwrap_or_default();
+    for d in &dirs {
+        let _ = std::fs::remove_dir_all(d);
+    }
+    dirs
+}
+
+/// An output directory written whole or not at all: results go into a hidden sibling
+/// `.<name>.partial-<pid>` and are moved into `<name>` by [`Staging::commit`] once everything
+/// succeeded. Dropped without a commit (an error, a panic) or removed by
+/// [`remove_unfinished`], the staging directory is gone: nothing is left that a user could
+/// take for a result. Files already in `<name>` from earlier runs stay unless this run writes
+/// the same names.
+#[derive(Debug)]
+pub struct Staging {
+    target: PathBuf,
+    staging: PathBuf,
+    committed: bool,
+}
+
+impl Staging {
+    /// Creates the staging directory beside `out`.
+    ///
+    /// # Errors
+    /// [`FileError::Path`] when `out` is a file or has no name; [`FileError::Io`] when the
+    /// directories cannot be made.
+    pub fn new(out: &Path) -> Result<Self> {
+        let parent = match out.parent() {
+            Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
+            _ => PathBuf::from("."),
+        };
+        let name = out.file_name().ok_or_else(|| {
+            FileError::Path(format!("--out {} does not name a directory", out.display()))
+        })?;
+        if out.is_file() {
+            return Err(FileError::Path(format!(
+                "--out {} is a file, not a directory",
+                out.display()
+            )));
+        }
+        std::fs::create_dir_all(&parent).map_err(FileError::io("creating", &parent))?;
+        let staging = parent.join(format!(
+            ".{}.partial-{}",
+            name.to_string_lossy(),
+            std::process::id()
+        ));
+        let _ = std::fs::remove_dir_all(&staging);
+        std::fs::create_dir_all(&staging).map_err(FileError::io("creating", &staging))?;
+        if let Ok(mut list) = active().lock() {
+            list.push(staging.clone());
+        }
+        Ok(Self {
+            target: out.to_path_buf(),
+            staging,
+            committed: false,
+        })
+    }
+
+    /// Where to write.
+    #[must_use]
+    pub fn path(&self) -> &Path {
+        &self.staging
+    }
+
+    /// Moves every file and folder written into the output directory (replacing ones of the
+    /// same name) and removes the staging directory.
+    ///
+    /// # Errors
+    /// [`FileError::Io`] naming the entry that could not be moved.
+    pub fn commit(mut self) -> Result<()> {
+        std::fs::create_dir_all(&self.target).map_err(FileError::io("creating", &self.target))?;
+        let entries =
+            std::fs::read_dir(&self.staging).map_err(FileError::io("reading", &self.staging))?;
+        for entry in entries {
+            let entry = entry.map_err(FileError::io("reading", &self.staging))?;
+            let to = self.target.join(entry.file_name());
+            if to.is_dir() && entry.path().is_dir() {
+                std::fs::remove_dir_all(&to).map_err(FileError::io("replacing", &to))?;
+            }
+            std::fs::rename(entry.path(), &to)
+                .map_err(FileError::io("moving the result into", &to))?;
+        }
+        self.committed = true;
+        let _ = std::fs::remove_dir_all(&self.staging);
+        forget(&self.staging);
+        Ok(())
+    }
+}
+
+fn forget(staging: &Path) {
+    if let Ok(mut list) = active().lock() {
+        list.retain(|p| p != staging);
+    }
+}
+
+impl Drop for Staging {
+    fn drop(&mut self) {
+        if !self.committed {
+            let _ = std::fs::remove_dir_all(&self.staging);
+        }
+        forget(&self.staging);
+    }
+}
+
+#[cfg(test)]
+#[allow(clippy::unwrap_used)] // tests: a panic is the failure report
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_dropped_stage_leaves_nothing_and_a_committed_one_replaces_only_its_names() {
+        let root = std::env::temp_dir().join(format!("qrm-files-stage-{}", std::process::id()));
+        let out = root.join("out");
+        std::fs::create_dir_all(&out).unwrap();
+        std::fs::write(out.join("old.txt"), "old").unwrap();
+        std::fs::write(out.join("a.txt"), "before").unwrap();
+        {
+            let s = Staging::new(&out).unwrap();
+            std::fs::write(s.path().join("a.txt"), "half").unwrap();
+        } // an error: dropped without a commit
+        assert_eq!(
+            std::fs::read_to_string(out.join("a.txt")).unwrap(),
+            "before"
+        );
+        let s = Staging::new(&out).unwrap();
+        std::fs::write(s.path().join("a.txt"), "after").unwrap();
+        let staged = s.path().to_path_buf();
+        s.commit().unwrap();
+        assert_eq!(std::fs::read_to_string(out.join("a.txt")).unwrap(), "after");
+        assert_eq!(std::fs::read_to_string(out.join("old.txt")).unwrap(), "old");
+        assert!(!staged.exists());
+        let names: Vec<_> = std::fs::read_dir(&root).unwrap().collect();
+        assert_eq!(names.len(), 1, "only `out` is left beside it");
+        std::fs::remove_dir_all(&root).unwrap();
+    }
+
+    #[test]
+    fn unfinished_stages_are_removed_on_request() {
+        let out = std::env::temp_dir().join(format!("qrm-files-int-{}", std::process::id()));
+        let s = Staging::new(&out).unwrap();
+        let staged = s.path().to_path_buf();
+        assert!(remove_unfinished().contains(&staged));
+        assert!(!staged.exists());
+        drop(s);
+        assert!(!out.exists());
+    }
+}
