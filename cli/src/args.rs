@@ -4,7 +4,7 @@ use std::path::PathBuf;
 
 use clap::{Parser, Subcommand};
 
-use crate::flags::{InputFormat, NoiseArgs};
+use crate::flags::{InputFormat, NoiseArgs, StudyFlags};
 
 /// qrm: qualitative relational maps for robots — calculi, probabilistic mapping, learned
 /// partitions and qualitative navigation.
@@ -76,7 +76,8 @@ pub enum PqrmCmd {
         #[arg(long, default_value_t = 0.0)]
         floor: f64,
     },
-    /// The Monte Carlo study of thesis §2.3.1 (Figs 2.6–2.11) with a report.
+    /// The Monte Carlo study of thesis §2.3.1 (Figs 2.6–2.11) with a report (`--quick`: 5
+    /// noise levels, 12 trials, 200 samples; under a minute).
     Study(StudyArgs),
     /// Map a recorded dataset with every point calculus: PQRM vs per-frame baseline
     /// (the analogue of thesis §2.3.2, Figs 2.14–2.16).
@@ -92,9 +93,6 @@ pub enum PqrmCmd {
 /// `qrm pqrm study`.
 #[derive(Debug, clap::Args)]
 pub struct StudyArgs {
-    /// Small study (5 noise levels, 12 trials, 200 samples): under a minute.
-    #[arg(long)]
-    pub quick: bool,
     /// Calculi, finest first (default: the six point calculi).
     #[arg(long, value_delimiter = ',')]
     pub calculi: Option<Vec<String>>,
@@ -110,12 +108,9 @@ pub struct StudyArgs {
     /// Landmarks per world.
     #[arg(long)]
     pub landmarks: Option<usize>,
-    /// Seed.
-    #[arg(long, default_value_t = 0)]
-    pub seed: u64,
-    /// Output directory.
-    #[arg(long)]
-    pub out: PathBuf,
+    /// --quick, --seed, --out.
+    #[command(flatten)]
+    pub run: StudyFlags,
 }
 
 /// `qrm pqrm real`.

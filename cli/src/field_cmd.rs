@@ -1,10 +1,9 @@
 //! `qrm qlink field`: the §4.4.2 field-site experiment in simulation — `qrm study run field`
 //! with the study's common options as flags (the study is `studies::qlink::field`).
 
-use std::path::PathBuf;
-
+use crate::flags::StudyFlags;
 use anyhow::Result;
-use studies::qlink::field::{FieldExperiment, FieldParams};
+use studies::qlink::field::FieldExperiment;
 
 /// `qrm qlink field`.
 #[derive(Debug, clap::Args)]
@@ -16,30 +15,20 @@ pub struct FieldArgs {
     /// (default 5; quick: 1). Rates are reported per world and pooled.
     #[arg(long)]
     pub worlds: Option<usize>,
-    /// Fewer trials, fewer samples and coarser checks: for tests.
-    #[arg(long)]
-    pub quick: bool,
-    /// Seed.
-    #[arg(long, default_value_t = 0)]
-    pub seed: u64,
-    /// Output directory.
-    #[arg(long)]
-    pub out: PathBuf,
+    /// --quick, --seed, --out.
+    #[command(flatten)]
+    pub run: StudyFlags,
 }
 
 /// Runs `qrm qlink field`.
 pub fn run(a: FieldArgs) -> Result<()> {
     // stage two: the flags become the `field` study's config, run by `qrm study`'s runner
-    let mut config = if a.quick {
-        FieldParams::quick(a.seed)
-    } else {
-        FieldParams::full(a.seed)
-    };
+    let mut config = a.run.config::<FieldExperiment>();
     if let Some(n) = a.trials {
         config.trials = n;
     }
     if let Some(n) = a.worlds {
         config.worlds = n;
     }
-    crate::study_cmd::run_study::<FieldExperiment>(&config, &a.out)
+    crate::study_cmd::run_study::<FieldExperiment>(&config, &a.run.out)
 }

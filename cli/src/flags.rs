@@ -69,3 +69,30 @@ impl NoiseArgs {
         }
     }
 }
+
+/// The flags every study alias shares (`qrm pqrm study`, `qrm qlink field`, …): what
+/// `qrm study run NAME` takes as `--quick`, `--seed` and `--out`.
+#[derive(Debug, Clone, clap::Args)]
+pub struct StudyFlags {
+    /// The quick config (a minute or less; the command's help says what it shrinks)
+    /// instead of the thesis's.
+    #[arg(long)]
+    pub quick: bool,
+    /// Seed.
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    /// Output directory.
+    #[arg(long)]
+    pub out: std::path::PathBuf,
+}
+
+impl StudyFlags {
+    /// Study `S`'s quick or full config with the seed: what the alias's own flags change.
+    pub fn config<S: studies::Study>(&self) -> S::Config {
+        if self.quick {
+            S::quick(self.seed)
+        } else {
+            S::full(self.seed)
+        }
+    }
+}

@@ -11,7 +11,6 @@ use pqrm::temper::TemperChoice;
 use pqrm::{Orderings, Pqrm, PqrmConfig, evaluate};
 use qsr_core::Calculus;
 use serde_json::json;
-use studies::Study;
 use studies::mapping::{MapJob, OrderingsChoice};
 use studies::pqrm::monte_carlo::MonteCarlo;
 use studies::pqrm::real_data::{NoiseSource, RealData, RealDataConfig};
@@ -261,11 +260,7 @@ fn merge(a: MergeArgs) -> Result<()> {
 
 fn study(a: StudyArgs) -> Result<()> {
     // stage two: the flags become the `monte-carlo` study's config, run by `qrm study`'s runner
-    let mut config = if a.quick {
-        MonteCarlo::quick(a.seed)
-    } else {
-        MonteCarlo::full(a.seed)
-    };
+    let mut config = a.run.config::<MonteCarlo>();
     if let Some(c) = a.calculi {
         config.calculi = c;
     }
@@ -281,7 +276,7 @@ fn study(a: StudyArgs) -> Result<()> {
     if let Some(l) = a.landmarks {
         config.landmarks = l;
     }
-    crate::study_cmd::run_study::<MonteCarlo>(&config, &a.out)
+    crate::study_cmd::run_study::<MonteCarlo>(&config, &a.run.out)
 }
 
 fn real(a: RealArgs) -> Result<()> {

@@ -1,21 +1,22 @@
 //! `qrm qlink ...`: Q-Link navigation studies (thesis chapter 4); `qrm qlink study` is
 //! `qrm study run table-4-1` with the study's options as flags.
 
-use std::path::PathBuf;
-
+use crate::flags::StudyFlags;
 use anyhow::Result;
 use qlink::{Arrival, References};
-use studies::qlink::table_4_1::{ArcRadius, StudyConfig, Table41, Trials};
+use studies::qlink::table_4_1::{ArcRadius, Table41, Trials};
 
 /// `qrm qlink ...`.
 #[derive(Debug, clap::Subcommand)]
 pub enum QlinkCmd {
     /// The §4.4.1 simulation study: failure rate vs sensor range and landmark size
-    /// (Table 4.1), |P| histogram (Fig 4.6), trajectory length vs |P| (Fig 4.7).
+    /// (Table 4.1), |P| histogram (Fig 4.6), trajectory length vs |P| (Fig 4.7) (`--quick`:
+    /// 400 random pairs per setting and a lighter map; under a minute).
     Study(StudyArgs),
     /// The §4.4.2 field-site experiment in simulation: a lidar-only hybrid map (point
     /// triplets + the two walls), random start/goal trials, success rate, causes of failure,
-    /// Table 4.2, and the thesis's proposed improvements measured.
+    /// Table 4.2, and the thesis's proposed improvements measured (`--quick`: fewer trials,
+    /// fewer samples and coarser checks).
     Field(crate::field_cmd::FieldArgs),
 }
 
@@ -36,9 +37,6 @@ pub struct StudyArgs {
     /// The trials to run.
     #[arg(long, value_enum, default_value_t = TrialsArg::All)]
     pub trial: TrialsArg,
-    /// 400 random pairs per setting and a lighter map: under a minute.
-    #[arg(long)]
-    pub quick: bool,
     /// Ordered start/goal pairs per setting (default: all 39,800; quick: 400).
     #[arg(long)]
     pub pairs: Option<usize>,
@@ -54,12 +52,9 @@ pub struct StudyArgs {
     /// robot's R, as the thesis drives them).
     #[arg(long)]
     pub arcs_at_sensor_range: bool,
-    /// Seed.
-    #[arg(long, default_value_t = 0)]
-    pub seed: u64,
-    /// Output directory.
-    #[arg(long)]
-    pub out: PathBuf,
+    /// --quick, --seed, --out.
+    #[command(flatten)]
+    pub run: StudyFlags,
 }
 
 /// Runs a `qrm qlink` subcommand.
@@ -72,11 +67,7 @@ pub fn run(cmd: QlinkCmd) -> Result<()> {
 
 fn study(a: StudyArgs) -> Result<()> {
     // stage two: the flags become the `table-4-1` study's config, run by `qrm study`'s runner
-    let mut config = if a.quick {
-        StudyConfig::quick(a.seed)
-    } else {
-        StudyConfig::full(a.seed)
-    };
+    let mut config = a.run.config::<Table41>();
     config.trial = match a.trial {
         TrialsArg::All => Trials::All,
         TrialsArg::SensorRange => Trials::SensorRange,
@@ -95,5 +86,5 @@ fn study(a: StudyArgs) -> Result<()> {
     if a.arcs_at_sensor_range {
         config.radius = ArcRadius::SensorRange;
     }
-    crate::study_cmd::run_study::<Table41>(&config, &a.out)
+    crate::study_cmd::run_study::<Table41>(&config, &a.run.out)
 }

@@ -4,7 +4,8 @@ use std::io::Read;
 use std::path::PathBuf;
 
 use anyhow::{Context, Result, bail};
-use pqrm::reason::{Fusion, InferOptions, Inferrer};
+use pqrm::LandmarkSet;
+use pqrm::reason::{Fusion, InferOptions, InferenceReport, Inferrer};
 use qsr_core::Calculus;
 use qsr_core::binary::{BinaryCalculus, BinaryNetwork, close_binary, is_binary_name};
 use qsr_core::reason::{
@@ -12,6 +13,7 @@ use qsr_core::reason::{
 };
 use serde_json::json;
 
+use crate::flags::StudyFlags;
 use crate::output::write_atomic;
 
 /// `qrm reason ...` (raw flags).
@@ -38,7 +40,7 @@ pub enum ReasonCmd {
     Infer(InferArgs),
     /// The reasoning study: inference of hidden sets on a recording with surveyed truth,
     /// inference of never-seen triplets in simulation, and the check's precision; report,
-    /// figures, JSON.
+    /// figures, JSON (`--quick`: two calculi, two hidings, two worlds).
     Study(ReasonStudyArgs),
 }
 
@@ -91,9 +93,6 @@ pub struct InferArgs {
 /// `qrm reason study`.
 #[derive(Debug, clap::Args)]
 pub struct ReasonStudyArgs {
-    /// A small study (two calculi, two hidings, two worlds).
-    #[arg(long)]
-    pub quick: bool,
     /// Recording format: mrclam brings its surveyed truth, the others need --truth.
     #[arg(long, value_enum, default_value_t = crate::flags::InputFormat::Mrclam)]
     pub format: crate::flags::InputFormat,
@@ -109,12 +108,9 @@ pub struct ReasonStudyArgs {
     /// Use only the first N frames with three or more landmarks.
     #[arg(long)]
     pub max_frames: Option<usize>,
-    /// Seed.
-    #[arg(long, default_value_t = 0)]
-    pub seed: u64,
-    /// Output directory.
-    #[arg(long)]
-    pub out: PathBuf,
+    /// --quick, --seed, --out.
+    #[command(flatten)]
+    pub run: StudyFlags,
 }
 
 /// Fusion rules (see `pqrm::reason::Fusion`).
@@ -191,23 +187,27 @@ pub enum NetworkFormat {
     Sparq,
 }
 
-/// A validated network job (stage two of argument parsing).
-struct Loaded {
-    network: Network,
-    algebra: Algebra,
+impl From<NetworkFormat> for qsr_core::reason::NetworkFormat {
+    fn from(f: NetworkFormat) -> Self {
+        match f {
+            NetworkFormat::Json => Self::Json,
+            NetworkFormat::Sparq => Self::Sparq,
+        }
+    }
 }
 
-/// The network's text and where it came from, and its form.
-fn read_network(args: &NetworkArgs) -> Result<(String, String, NetworkFormat)> {
+/// The network's text, where it came from, and its form (`--format`, else told by its first
+/// character).
+fn read_network(args: &NetworkArgs) -> Result<(String, String, qsr_core::reason::NetworkFormat)> {
+    let max = qsr_core::text_file::MAX_INPUT_BYTES;
     let (origin, text) = match &args.input {
         Some(path) => (
             path.display().to_string(),
-            qsr_core::text_file::read_text(path, qsr_core::text_file::MAX_INPUT_BYTES)
+            qsr_core::text_file::read_text(path, max)
                 .with_context(|| format!("reading {}", path.display()))?,
         ),
         None => {
             let mut s = String::new();
-            let max = qsr_core::text_file::MAX_INPUT_BYTES;
             std::io::stdin()
                 .take(max + 1)
                 .read_to_string(&mut s)
@@ -217,16 +217,9 @@ fn read_network(args: &NetworkArgs) -> Result<(String, String, NetworkFormat)> {
         }
     };
     let format = match args.format {
-        Some(f) => f,
-        None => match text.trim_start().chars().next() {
-            Some('{') => NetworkFormat::Json,
-            Some('(') => NetworkFormat::Sparq,
-            Some(c) => bail!(
-                "{origin}: cannot tell the network's form from its first character `{c}` \
-                 (JSON starts with `{{`, SparQ with `(`); say --format"
-            ),
-            None => bail!("{origin}: empty input, expected a constraint network"),
-        },
+        Some(f) => f.into(),
+        None => qsr_core::reason::NetworkFormat::detect(&text)
+            .with_context(|| format!("{origin} (say --format)"))?,
     };
     Ok((origin, text, format))
 }
@@ -243,24 +236,26 @@ fn close_binary_network(args: &NetworkArgs) -> Result<()> {
     let calculus = BinaryCalculus::builtin(&args.calculus)
         .with_context(|| format!("loading calculus `{}`", args.calculus))?;
     let (origin, text, format) = read_network(args)?;
-    let network = match format {
-        NetworkFormat::Json => BinaryNetwork::from_json_str(&calculus, &text),
-        NetworkFormat::Sparq => BinaryNetwork::from_sparq_str(&calculus, &text),
-    }
-    .with_context(|| format!("reading the network from {origin}"))?;
+    let network = BinaryNetwork::parse(&calculus, &text, format)
+        .with_context(|| format!("reading the network from {origin}"))?;
     let closed = close_binary(network)?;
     if let Some(why) = closed.describe() {
         eprintln!("inconsistent: {why}");
     }
-    let out = json!({
-        "consistent": closed.is_consistent(),
-        "constraints": closed.network.constraints_json(),
-    });
-    outln!("{out}")?;
+    print_constraints(closed.is_consistent(), closed.network.constraints_json())
+}
+
+/// `{"consistent": bool, "constraints": [...]}` on stdout.
+fn print_constraints(consistent: bool, constraints: serde_json::Value) -> Result<()> {
+    outln!(
+        "{}",
+        json!({"consistent": consistent, "constraints": constraints})
+    )?;
     Ok(())
 }
 
-fn load(args: &NetworkArgs) -> Result<Loaded> {
+/// A ternary network and the algebra it is reasoned with (stage two of argument parsing).
+fn load(args: &NetworkArgs) -> Result<(Network, Algebra)> {
     if is_binary_name(&args.calculus) {
         bail!(
             "`{}` is binary: `qrm reason close` runs on binary networks; scenarios are \
@@ -271,11 +266,8 @@ fn load(args: &NetworkArgs) -> Result<Loaded> {
     let calculus = Calculus::resolve(&args.calculus)
         .with_context(|| format!("loading calculus `{}`", args.calculus))?;
     let (origin, text, format) = read_network(args)?;
-    let network = match format {
-        NetworkFormat::Json => Network::from_json_str(&calculus, &text),
-        NetworkFormat::Sparq => Network::from_sparq_str(&calculus, &text),
-    }
-    .with_context(|| format!("reading the network from {origin}"))?;
+    let network = Network::parse(&calculus, &text, format)
+        .with_context(|| format!("reading the network from {origin}"))?;
     let scope = if args.general_position {
         TableScope::GeneralPosition
     } else {
@@ -283,42 +275,28 @@ fn load(args: &NetworkArgs) -> Result<Loaded> {
     };
     let algebra = Algebra::of(&calculus, scope)
         .with_context(|| format!("deriving the tables of `{}`", calculus.name()))?;
-    Ok(Loaded { network, algebra })
+    Ok((network, algebra))
 }
 
 pub fn run(cmd: ReasonCmd) -> Result<()> {
     match cmd {
         ReasonCmd::Close(args) if is_binary_name(&args.calculus) => close_binary_network(&args),
         ReasonCmd::Close(args) => {
-            let Loaded { network, algebra } = load(&args)?;
+            let (network, algebra) = load(&args)?;
             let closed = close(network, &algebra)?;
             if let Some(c) = &closed.contradiction {
                 eprintln!("inconsistent: {}", c.describe(&closed.network));
             }
-            let out = json!({
-                "consistent": closed.is_consistent(),
-                "constraints": closed.network.constraints_json(),
-            });
-            outln!("{out}")?;
-            Ok(())
+            print_constraints(closed.is_consistent(), closed.network.constraints_json())
         }
         ReasonCmd::Scenario(args) => {
-            let Loaded { network, algebra } = load(&args.network)?;
+            let (network, algebra) = load(&args.network)?;
             let options = ScenarioOptions {
                 max_nodes: args.max_nodes,
             };
             match find_scenario(network, &algebra, &options)? {
-                ScenarioOutcome::Found(s) => {
-                    outln!(
-                        "{}",
-                        json!({"consistent": true, "constraints": s.constraints_json()})
-                    )?;
-                    Ok(())
-                }
-                ScenarioOutcome::None => {
-                    outln!("{}", json!({"consistent": false, "constraints": null}))?;
-                    Ok(())
-                }
+                ScenarioOutcome::Found(s) => print_constraints(true, s.constraints_json()),
+                ScenarioOutcome::None => print_constraints(false, serde_json::Value::Null),
                 ScenarioOutcome::GaveUp { nodes } => bail!(
                     "no answer within {nodes} search nodes (raise --max-nodes to search longer)"
                 ),
@@ -356,32 +334,9 @@ fn check(args: &CheckArgs) -> Result<()> {
     let result = pqrm::reason::check(&map)?;
     if args.json {
         outln!("{}", serde_json::to_string_pretty(&result)?)?;
-        return Ok(());
-    }
-    outln!(
-        "{} sets of `{}`: the most likely states {} closure",
-        result.sets,
-        map.calculus().name(),
-        if result.consistent { "pass" } else { "fail" }
-    )?;
-    if let Some(c) = &result.contradiction {
-        outln!("first contradiction: {c}")?;
-    }
-    if !result.flagged.is_empty() {
-        outln!(
-            "{} entries to relax (irreducible, chosen greedily by belief; {} closures):",
-            result.flagged.len(),
-            result.closures
-        )?;
-        outln!("{:<18} {:<16} {:>8}", "set", "ML state", "P(ML)")?;
-        for f in &result.flagged {
-            outln!(
-                "{:<18} {:<16} {:>8.4}",
-                format!("{:?}", f.set),
-                f.state,
-                f.p
-            )?;
-        }
+    } else {
+        let text = result.to_text(map.calculus().name());
+        outln!("{}", text.trim_end())?;
     }
     Ok(())
 }
@@ -393,65 +348,24 @@ fn infer(args: &InferArgs) -> Result<()> {
         epsilon: args.epsilon,
         rounds: args.rounds,
     };
-    let landmarks: Vec<u32> = pqrm::reason::landmarks(&map).iter().map(|l| l.0).collect();
-    for set in &args.sets {
-        if let Some(id) = set.iter().find(|id| !landmarks.contains(id)) {
-            bail!("landmark {id} is not in the map (its landmarks: {landmarks:?})");
-        }
-    }
     let mut inferrer = Inferrer::new(&map, options)?;
-    let unseen = inferrer.infer_unseen();
-    let inferences: Vec<pqrm::reason::Inference> = if args.sets.is_empty() {
-        unseen
+    let inferences = if args.sets.is_empty() {
+        inferrer.infer_unseen()
     } else {
-        let round_of: std::collections::BTreeMap<[u32; 3], usize> =
-            unseen.iter().map(|i| (i.set, i.round)).collect();
-        args.sets
+        let sets: Vec<LandmarkSet> = args
+            .sets
             .iter()
-            .map(|[a, b, d]| {
-                let mut inf = inferrer.infer(pqrm::LandmarkSet::new(*a, *b, *d))?;
-                let mut key = [*a, *b, *d];
-                key.sort_unstable();
-                if let Some(r) = round_of.get(&key) {
-                    inf.round = *r;
-                }
-                Ok(inf)
-            })
-            .collect::<Result<_>>()?
+            .map(|[a, b, d]| LandmarkSet::new(*a, *b, *d))
+            .collect();
+        inferrer.infer_sets(&sets)?
     };
-    let calc = map.calculus();
-    let uniform_entropy = (calc.n_states() as f64).ln();
-    let mut informative = 0;
-    let mut rows = Vec::with_capacity(inferences.len());
-    for inf in &inferences {
-        let h = pqrm::metrics::entropy(&inf.p);
-        informative += usize::from(h < uniform_entropy - 0.05);
-        rows.push(json!({
-            "set": inf.set,
-            "ml": calc.label(inf.ml_state()),
-            "p": inf.p,
-            "entropy": h,
-            "paths": inf.paths,
-            "round": inf.round,
-            "via": inf.via,
-        }));
-    }
-    let sets = &inferences;
-    let out = json!({
-        "calculus": calc.name(),
-        "states": calc.labels(),
-        "fusion": Fusion::from(args.fusion).name(),
-        "alpha": inferrer.alpha(),
-        "epsilon": args.epsilon,
-        "rounds": args.rounds,
-        "inferences": rows,
-    });
-    write_atomic(&args.out, serde_json::to_string_pretty(&out)?.as_bytes())?;
+    let report = InferenceReport::new(map.calculus(), &options, inferrer.alpha(), &inferences);
+    write_atomic(&args.out, serde_json::to_string_pretty(&report)?.as_bytes())?;
     outln!(
         "inferred {} sets of `{}` ({} more informative than uniform); wrote {}",
-        sets.len(),
-        calc.name(),
-        informative,
+        report.inferences.len(),
+        report.calculus,
+        report.informative(),
         args.out.display()
     )?;
     Ok(())
@@ -459,13 +373,8 @@ fn infer(args: &InferArgs) -> Result<()> {
 
 /// `qrm reason study`: an alias of `qrm study run reason` (the study's config from the flags).
 fn study(a: &ReasonStudyArgs) -> Result<()> {
-    use studies::Study;
-    use studies::pqrm::reasoning::{ReasonConfig, ReasonStudy};
-    let mut config: ReasonConfig = if a.quick {
-        ReasonStudy::quick(a.seed)
-    } else {
-        ReasonStudy::full(a.seed)
-    };
+    use studies::pqrm::reasoning::ReasonStudy;
+    let mut config = a.run.config::<ReasonStudy>();
     if let Some(input) = &a.input {
         config.input.clone_from(input);
     }
@@ -475,5 +384,5 @@ fn study(a: &ReasonStudyArgs) -> Result<()> {
     if let Some(c) = &a.calculi {
         config.study.calculi.clone_from(c);
     }
-    crate::study_cmd::run_study::<ReasonStudy>(&config, &a.out)
+    crate::study_cmd::run_study::<ReasonStudy>(&config, &a.run.out)
 }

@@ -7,10 +7,10 @@ use anyhow::{Context, Result, bail};
 use serde_json::json;
 use serge::{BeliefSet, CellMasses, Grid, SalientRegionMap, Serge, SergeParams};
 use studies::serge::SergeStudy;
-use studies::serge::cross_validation::StudyConfig;
 use studies::serge::datasets::{DATASETS, DatasetName};
 use studies::serge::learned_calculus::compose_table_json;
 
+use crate::flags::StudyFlags;
 use crate::output::{Staging, write_atomic, write_picture};
 use qrm_plot::{RegionPicture, region_map};
 use serge::learner::CalculusLearner;
@@ -21,7 +21,8 @@ use serge::selection::TripletSelection;
 pub enum SergeCmd {
     /// Build a salient region map from your own beliefs (JSON) and draw it.
     Run(RunArgs),
-    /// The 5-fold cross-validation study of thesis §3.4 (Figs 3.7–3.10) with a report.
+    /// The 5-fold cross-validation study of thesis §3.4 (Figs 3.7–3.10) with a report
+    /// (`--quick`: 60×60 grid, 5 μ, 3 σ, T = 5·K, 2,000 samples; under a minute).
     Study(StudyArgs),
     /// Learn a calculus from observed landmark triplets (an observation CSV, as `qrm sim`
     /// writes): SERGE in the normalised frame, the calculus spec, its compose table.
@@ -65,15 +66,9 @@ pub struct StudyArgs {
     #[arg(long, default_value = "all",
           value_parser = clap::builder::PossibleValuesParser::new(DATASETS.iter().copied().chain(["all"])))]
     pub dataset: String,
-    /// Small study (60×60 grid, 5 μ, 3 σ, T = 5·K, 2,000 samples): under a minute.
-    #[arg(long)]
-    pub quick: bool,
-    /// Seed.
-    #[arg(long, default_value_t = 0)]
-    pub seed: u64,
-    /// Output directory.
-    #[arg(long)]
-    pub out: PathBuf,
+    /// --quick, --seed, --out.
+    #[command(flatten)]
+    pub run: StudyFlags,
 }
 
 /// `qrm serge learn`.
@@ -215,15 +210,11 @@ fn run_map(a: RunArgs) -> Result<()> {
 // the study: `qrm study run serge-cv` with its common options as flags
 
 fn study(a: StudyArgs) -> Result<()> {
-    let mut config = if a.quick {
-        StudyConfig::quick(a.seed)
-    } else {
-        StudyConfig::full(a.seed)
-    };
+    let mut config = a.run.config::<SergeStudy>();
     if a.dataset != "all" {
         config.datasets = vec![DatasetName::parse(&a.dataset)?];
     }
-    crate::study_cmd::run_study::<SergeStudy>(&config, &a.out)
+    crate::study_cmd::run_study::<SergeStudy>(&config, &a.run.out)
 }
 
 // ---------------------------------------------------------------------------------------

@@ -291,6 +291,51 @@ fn check_and_infer_work_on_a_saved_map() {
     assert!(String::from_utf8_lossy(&out.stderr).contains("99"));
 }
 
+/// Regression (issue 14): `qrm reason infer --set A,B,D` composed through the sets a full
+/// run had just inferred while saying "round 1", so one set got two answers: 42 paths and
+/// another distribution with `--set`, 2 paths in the run over every unseen set. Asked alone
+/// or read from the full run, a set now gets the same inference, in either number of rounds.
+#[test]
+fn infer_of_one_set_agrees_with_the_run_over_every_unseen_set() {
+    let dir = tmp("infer-agrees");
+    let map = small_map(&dir);
+    let map = map.to_str().unwrap();
+    for rounds in ["1", "2"] {
+        let full = dir.join(format!("full{rounds}.json"));
+        let args = ["reason", "infer", map, "--rounds", rounds, "--out"];
+        ok(&[&args[..], &[full.to_str().unwrap()]].concat(), "");
+        let v: Value = serde_json::from_str(&std::fs::read_to_string(&full).unwrap()).unwrap();
+        let reached: Vec<&Value> = v["inferences"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .filter(|r| r["round"].as_u64().unwrap() >= 1)
+            .collect();
+        assert!(!reached.is_empty(), "{v}");
+        for row in reached.iter().take(4) {
+            let set: Vec<String> = row["set"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .map(ToString::to_string)
+                .collect();
+            let one = dir.join("one.json");
+            let joined = set.join(",");
+            let mut a = args.to_vec();
+            a.extend([one.to_str().unwrap(), "--set", joined.as_str()]);
+            ok(&a, "");
+            let w: Value = serde_json::from_str(&std::fs::read_to_string(&one).unwrap()).unwrap();
+            let alone = &w["inferences"][0];
+            for key in ["p", "paths", "round", "via", "ml"] {
+                assert_eq!(
+                    alone[key], row[key],
+                    "{key} of {set:?} in {rounds} round(s)"
+                );
+            }
+        }
+    }
+}
+
 #[test]
 fn study_runs_on_mrclam_and_judges_its_claims() {
     let data = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../shared/data/mrclam-dataset7");

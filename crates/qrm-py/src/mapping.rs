@@ -146,8 +146,9 @@ impl Pqrm {
 
     /// A distribution for the ordered set (a, b, d) from the map's other beliefs through the
     /// compose table (see `pqrm::reason`): {"p": array, "paths": int, "via": [ids], "round":
-    /// int, "alpha": float}. With `rounds > 1` sets never observed are inferred first in
-    /// rounds, so longer chains of composition contribute.
+    /// int, "alpha": float}. A set the map observed is predicted from the observed beliefs; a
+    /// set never observed is inferred as in the run over every unseen set (`rounds` of
+    /// chained composition), so the two agree.
     #[pyo3(signature = (set, *, fusion = "fitted", epsilon = 0.01, rounds = 1))]
     fn infer<'py>(
         &self,
@@ -166,11 +167,9 @@ impl Pqrm {
         let map = &self.inner;
         let (inf, alpha) = crate::pool::detach(py, || {
             let mut inferrer = pqrm::reason::Inferrer::new(map, options)?;
-            if rounds > 1 {
-                inferrer.infer_unseen();
-            }
-            let inf = inferrer.infer(LandmarkSet::new(set.0, set.1, set.2))?;
-            Ok::<_, pqrm::PqrmError>((inf, inferrer.alpha()))
+            // as the run over every unseen set infers it (`Inferrer::infer_sets`)
+            let mut inf = inferrer.infer_sets(&[LandmarkSet::new(set.0, set.1, set.2)])?;
+            Ok::<_, pqrm::PqrmError>((inf.remove(0), inferrer.alpha()))
         })
         .map_err(perr)?;
         let d = PyDict::new(py);

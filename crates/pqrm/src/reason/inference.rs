@@ -151,6 +151,11 @@ pub struct Inferrer<'m> {
     alpha: f64,
     landmarks: Vec<u32>,
     inferred: BTreeMap<LandmarkSet, Vec<f64>>,
+    /// Each ordering of a set [`Inferrer::infer_unseen`] reached, as it was reached (its
+    /// paths and round), for [`Inferrer::infer_sets`].
+    reached: BTreeMap<LandmarkSet, Inference>,
+    /// Whether [`Inferrer::infer_unseen`] ran (a second run would compose through the first).
+    rounds_ran: bool,
 }
 
 /// The grid α is fitted on.
@@ -210,6 +215,8 @@ impl<'m> Inferrer<'m> {
             alpha: 1.0,
             landmarks: landmarks(map).iter().map(|l| l.0).collect(),
             inferred: BTreeMap::new(),
+            reached: BTreeMap::new(),
+            rounds_ran: false,
         };
         if options.fusion == Fusion::Fitted {
             me.alpha = me.fit_alpha();
@@ -350,6 +357,7 @@ impl<'m> Inferrer<'m> {
     /// (`round` 0). Round r sees only what rounds before it inferred, so the result does not
     /// depend on the order of the sets.
     pub fn infer_unseen(&mut self) -> Vec<Inference> {
+        self.rounds_ran = true;
         let seen: BTreeSet<LandmarkSet> = observed_sets(self.map).into_iter().collect();
         let ids = self.landmarks.clone();
         let mut unseen = Vec::new();
@@ -382,6 +390,16 @@ impl<'m> Inferrer<'m> {
                     .iter()
                     .map(|(o, p, _)| (*o, self.fuse(p, self.options.fusion)))
                     .collect();
+                for ((o, paths, via), (_, p)) in per_ordering.iter().zip(&fused) {
+                    let reached = Inference {
+                        set: o.ids(),
+                        p: p.clone(),
+                        paths: paths.len(),
+                        via: via.clone(),
+                        round,
+                    };
+                    self.reached.insert(*o, reached);
+                }
                 let (_, p0, v0) = &per_ordering[0];
                 let inf = Inference {
                     set: s.ids(),
@@ -415,6 +433,49 @@ impl<'m> Inferrer<'m> {
                 })
             })
             .collect()
+    }
+
+    /// Infers the ordered `sets` as a run over the whole map does, so asking for one set and
+    /// reading it from the run over every unseen set give the same answer: a set the map
+    /// observed is predicted from the observed beliefs ([`Inferrer::infer`] before any
+    /// round), a set never observed is what [`Inferrer::infer_unseen`]'s rounds reached for
+    /// that ordering (uniform, round 0, when no round reached it).
+    ///
+    /// # Errors
+    /// [`PqrmError::InvalidConfig`] for a landmark the map does not have or a set that
+    /// repeats one.
+    pub fn infer_sets(&mut self, sets: &[LandmarkSet]) -> Result<Vec<Inference>> {
+        for s in sets {
+            if let Some(id) = s.ids().iter().find(|id| !self.landmarks.contains(id)) {
+                return Err(PqrmError::InvalidConfig(format!(
+                    "landmark {id} is not in the map (its landmarks: {:?})",
+                    self.landmarks
+                )));
+            }
+        }
+        let seen: BTreeSet<LandmarkSet> = observed_sets(self.map).into_iter().collect();
+        // Observed sets first, from observed beliefs alone; every set is checked here.
+        let direct: Vec<Inference> = sets.iter().map(|s| self.infer(*s)).collect::<Result<_>>()?;
+        if sets.iter().any(|s| !seen.contains(&canonical(*s))) && !self.rounds_ran {
+            self.infer_unseen();
+        }
+        let q = self.algebra.n_states();
+        Ok(sets
+            .iter()
+            .zip(direct)
+            .map(|(s, d)| {
+                if seen.contains(&canonical(*s)) {
+                    return d;
+                }
+                self.reached.get(s).cloned().unwrap_or_else(|| Inference {
+                    set: s.ids(),
+                    p: vec![1.0 / q as f64; q],
+                    paths: 0,
+                    via: Vec::new(),
+                    round: 0,
+                })
+            })
+            .collect())
     }
 
     /// The inferred belief of an ordered set after [`Inferrer::infer_unseen`].

@@ -41,7 +41,9 @@
 pub mod check;
 pub mod inference;
 pub mod network;
+pub mod report;
 
 pub use check::{FlaggedEntry, MapCheck, check};
 pub use inference::{Fusion, InferOptions, Inference, Inferrer, infer};
 pub use network::{Selection, landmarks, observed_sets, to_network};
+pub use report::{InferenceReport, InferredSet};

@@ -548,3 +548,20 @@ pub fn close_binary(network: BinaryNetwork) -> crate::Result<BinaryClosure> {
 pub fn relation_set(calculus: &BinaryCalculus, ids: impl IntoIterator<Item = StateId>) -> StateSet {
     StateSet::from_states(calculus.n_states(), ids)
 }
+
+impl BinaryNetwork {
+    /// Reads a network of `calculus` in `format`.
+    ///
+    /// # Errors
+    /// As [`BinaryNetwork::from_json_str`] and [`BinaryNetwork::from_sparq_str`].
+    pub fn parse(
+        calculus: &BinaryCalculus,
+        text: &str,
+        format: crate::reason::NetworkFormat,
+    ) -> crate::Result<Self> {
+        match format {
+            crate::reason::NetworkFormat::Json => Self::from_json_str(calculus, text),
+            crate::reason::NetworkFormat::Sparq => Self::from_sparq_str(calculus, text),
+        }
+    }
+}

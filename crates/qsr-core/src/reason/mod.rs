@@ -47,6 +47,7 @@
 mod algebra;
 mod closure;
 pub(crate) mod network;
+mod network_format;
 mod scenario;
 mod state_set;
 
@@ -55,5 +56,6 @@ pub use closure::{
     Closure, ClosureOptions, ClosureStats, Contradiction, Rule, Step, close, close_with,
 };
 pub use network::{MAX_NETWORK_BYTES, Network};
+pub use network_format::NetworkFormat;
 pub use scenario::{ScenarioOptions, ScenarioOutcome, find_scenario};
 pub use state_set::StateSet;
