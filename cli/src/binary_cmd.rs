@@ -7,7 +7,6 @@ use std::time::Instant;
 
 use anyhow::Result;
 use qsr_core::binary::{BinaryCalculus, CacheOutcome, render_binary_svg};
-use serde_json::json;
 
 use crate::output::write_atomic;
 
@@ -100,32 +99,10 @@ pub fn run(out: &mut impl Write, c: &BinaryCalculus, job: BinaryJob) -> Result<(
 
 fn show(out: &mut impl Write, c: &BinaryCalculus, json: bool) -> Result<()> {
     if json {
-        let v = json!({
-            "name": c.name(),
-            "description": c.description(),
-            "frame": if c.is_oriented() { "binary-opra" } else { "binary-star" },
-            "arity": 2,
-            "input_len": c.input_len(),
-            "n_states": c.n_states(),
-            "sectors": c.partition().n_sectors(),
-            "states": c.states().map(|s| json!({"id": s.0, "label": c.label(s)})).collect::<Vec<_>>(),
-            "table_hash": format!("{:016x}", c.table_hash()),
-        });
-        writeln!(out, "{}", serde_json::to_string_pretty(&v)?)?;
-        return Ok(());
+        writeln!(out, "{}", serde_json::to_string_pretty(&c.describe_json())?)?;
+    } else {
+        write!(out, "{}", c.describe())?;
     }
-    writeln!(out, "{} — {}", c.name(), c.description())?;
-    writeln!(
-        out,
-        "binary calculus, {} numbers per line for `classify`, {} sectors per point",
-        c.input_len(),
-        c.partition().n_sectors()
-    )?;
-    writeln!(out, "relations: {}", c.n_states())?;
-    for s in c.states() {
-        writeln!(out, "  {:>4}  {}", s.0, c.label(s))?;
-    }
-    writeln!(out, "table hash (disk cache key): {:016x}", c.table_hash())?;
     Ok(())
 }
 

@@ -6,7 +6,6 @@ use std::path::PathBuf;
 use anyhow::{Context, Result, bail};
 use qsr_core::binary::{BINARY_NAMES, BinaryCalculus, is_binary_name};
 use qsr_core::{BUILTIN_NAMES, Calculus, Permutation, RenderOptions};
-use serde_json::json;
 
 use crate::args::CalculusCmd;
 use crate::binary_cmd::{BinaryJob, TableFormat};
@@ -244,79 +243,10 @@ pub fn run(cmd: CalculusCmd) -> Result<()> {
 }
 
 fn show(out: &mut impl Write, c: &Calculus, json: bool) -> Result<()> {
-    let spec = c.spec();
     if json {
-        let v = json!({
-            "name": c.name(),
-            "description": c.description(),
-            "frame": c.frame().as_str(),
-            "arity": match c.frame() {
-                qsr_core::FrameKind::Ternary => 3,
-                qsr_core::FrameKind::BinaryOriented => 2,
-                qsr_core::FrameKind::Extended => 3,
-            },
-            "input_len": c.frame().input_len(),
-            "n_states": c.n_states(),
-            "max_entropy": c.max_entropy(),
-            "states": c.states().map(|s| json!({"id": s.0, "label": c.label(s)})).collect::<Vec<_>>(),
-            "constraints": spec.constraints,
-            "raster": spec.raster.as_ref().map(|r| json!({"window": r.window, "nx": r.nx, "ny": r.ny, "outside": r.outside})),
-        });
-        writeln!(out, "{}", serde_json::to_string_pretty(&v)?)?;
-        return Ok(());
-    }
-    writeln!(out, "{} — {}", c.name(), c.description())?;
-    writeln!(
-        out,
-        "frame: {} ({} numbers per line for `classify`)",
-        c.frame().as_str(),
-        c.frame().input_len()
-    )?;
-    writeln!(
-        out,
-        "states: {} (max entropy {:.3} nats)",
-        c.n_states(),
-        c.max_entropy()
-    )?;
-    for s in c.states() {
-        let cells = &spec.states[s.index()].cells;
-        if cells.is_empty() {
-            writeln!(out, "  {:>3}  {}", s.0, c.label(s))?;
-        } else {
-            writeln!(
-                out,
-                "  {:>3}  {:<16} cells {}",
-                s.0,
-                c.label(s),
-                cells.join(" ")
-            )?;
-        }
-    }
-    if !spec.constraints.is_empty() {
-        writeln!(out, "constraints (sign pattern order):")?;
-        for (i, k) in spec.constraints.iter().enumerate() {
-            let geom = match k.shape {
-                qsr_core::Shape::Line { a, b, c } => format!("line {a}·x + {b}·y + {c} = 0"),
-                qsr_core::Shape::Circle { center, radius } => {
-                    format!(
-                        "circle centre ({}, {}) radius {radius}",
-                        center[0], center[1]
-                    )
-                }
-            };
-            writeln!(
-                out,
-                "  {i}  {:<10} {geom}, zero set joins the {:?} side",
-                k.name, k.zero
-            )?;
-        }
-    }
-    if let Some(r) = &spec.raster {
-        writeln!(
-            out,
-            "raster: {}x{} over {:?}, outside: {:?}",
-            r.nx, r.ny, r.window, r.outside
-        )?;
+        writeln!(out, "{}", serde_json::to_string_pretty(&c.describe_json())?)?;
+    } else {
+        write!(out, "{}", c.describe())?;
     }
     Ok(())
 }

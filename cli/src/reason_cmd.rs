@@ -218,8 +218,14 @@ fn read_network(args: &NetworkArgs) -> Result<(String, String, qsr_core::reason:
     };
     let format = match args.format {
         Some(f) => f.into(),
-        None => qsr_core::reason::NetworkFormat::detect(&text)
-            .with_context(|| format!("{origin} (say --format)"))?,
+        None => qsr_core::reason::NetworkFormat::detect(&text).map_err(|e| {
+            let hint = if text.trim().is_empty() {
+                ""
+            } else {
+                "; say --format"
+            };
+            anyhow::anyhow!("{origin}: {e}{hint}")
+        })?,
     };
     Ok((origin, text, format))
 }

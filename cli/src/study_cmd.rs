@@ -265,18 +265,10 @@ pub fn run_and_write(
 }
 
 /// The report's tables and claims on the terminal.
-pub fn print_report(report: &Report) -> Result<()> {
-    for t in report.tables.iter().filter(|t| t.in_report) {
-        outln!("{}:\n{}", t.title, t.to_terminal())?;
-    }
-    for c in &report.claims {
-        outln!(
-            "[{}] {}: thesis {}; ours {}",
-            c.verdict.as_str(),
-            c.what,
-            c.thesis,
-            c.ours
-        )?;
+fn print_report(report: &Report) -> Result<()> {
+    let text = report.to_terminal();
+    if !text.is_empty() {
+        outln!("{}", text.trim_end_matches('\n'))?;
     }
     Ok(())
 }

@@ -280,7 +280,6 @@ pub fn fit_temper(
     if calculi.is_empty() {
         return Err(PqrmError::InvalidConfig("no calculus given".into()));
     }
-    let n = scans.len();
     let usable = scans.iter().filter(|s| s.observations.len() >= 3).count();
     if usable < options.folds {
         return Err(PqrmError::Mismatch(format!(
@@ -290,21 +289,44 @@ pub fn fit_temper(
         )));
     }
     let k = options.folds;
-    let frame_counts = |step: usize, scan: &Scan| -> Result<Vec<StepCounts>> {
-        let samples = ScanSamples::draw_with(
-            scan,
-            config.samples,
-            config.seed,
-            step as u64,
-            config.sensor,
-        );
-        calculi
-            .iter()
-            .map(|c| step_counts(c, &samples, config.orderings))
-            .collect()
-    };
+    let blocks = block_sums(calculi, scans, config, k, progress)?;
+    let (totals, units) = held_out_scores(calculi, scans, config, options, &blocks, progress)?;
+    calculi
+        .iter()
+        .enumerate()
+        .map(|(ci, calc)| choose(calc, k, options, &totals[ci], units[ci]))
+        .collect()
+}
 
-    // Pass 1: every block's summed evidence per triplet.
+/// Each calculus's evidence from frame `step`: its counts per landmark set.
+fn frame_counts(
+    calculi: &[Calculus],
+    config: PqrmConfig,
+    step: usize,
+    scan: &Scan,
+) -> Result<Vec<StepCounts>> {
+    let samples = ScanSamples::draw_with(
+        scan,
+        config.samples,
+        config.seed,
+        step as u64,
+        config.sensor,
+    );
+    calculi
+        .iter()
+        .map(|c| step_counts(c, &samples, config.orderings))
+        .collect()
+}
+
+/// Pass 1: every block's summed evidence per calculus and triplet.
+fn block_sums(
+    calculi: &[Calculus],
+    scans: &[Scan],
+    config: PqrmConfig,
+    k: usize,
+    progress: &dyn Progress,
+) -> Result<Vec<HashMap<LandmarkSet, BlockSums>>> {
+    let n = scans.len();
     let mut blocks: Vec<HashMap<LandmarkSet, BlockSums>> =
         calculi.iter().map(|_| HashMap::new()).collect();
     for (i, scan) in scans.iter().enumerate() {
@@ -313,7 +335,10 @@ pub fn fit_temper(
             continue;
         }
         let b = block_of(i, n, k);
-        for (ci, counts) in frame_counts(i, scan)?.into_iter().enumerate() {
+        for (ci, counts) in frame_counts(calculi, config, i, scan)?
+            .into_iter()
+            .enumerate()
+        {
             let q = calculi[ci].n_states();
             for (set, c) in &counts {
                 let e = blocks[ci].entry(set).or_insert_with(|| BlockSums {
@@ -330,20 +355,74 @@ pub fn fit_temper(
             }
         }
     }
+    Ok(blocks)
+}
 
-    // Pass 2: score each held-out frame against the other blocks' map, for every τ.
+/// One (triplet, held-out block) unit being scored: the belief of the other blocks under each
+/// τ, the summed log scores for each (τ, ε), and the frames scored.
+type Unit = (Vec<Vec<f64>>, Vec<f64>, u32);
+
+/// A triplet's belief trained on every block but `b`, under each τ of the grid: a new unit.
+fn trained_unit(e: &BlockSums, b: usize, q: usize, k: usize, options: &TemperOptions) -> Unit {
+    let train: Vec<f64> = (0..q)
+        .map(|s| {
+            (0..k)
+                .filter(|&bb| bb != b)
+                .map(|bb| e.sums[bb * q + s])
+                .sum()
+        })
+        .collect();
+    let beliefs = options
+        .grid
+        .iter()
+        .map(|tau| {
+            normalise(train.iter().map(|v| tau * v).collect())
+                .into_iter()
+                .map(f64::exp)
+                .collect()
+        })
+        .collect();
+    (
+        beliefs,
+        vec![0.0; options.grid.len() * OUTLIER_GRID.len()],
+        0,
+    )
+}
+
+/// Adds one held-out frame's log predictive probability under each (τ, ε) to `unit`.
+fn score_into(unit: &mut Unit, seen: &[f64]) {
+    let uniform = 1.0 / seen.len() as f64;
+    for (s, p) in unit.1.chunks_mut(OUTLIER_GRID.len()).zip(&unit.0) {
+        let pred: f64 = p.iter().zip(seen).map(|(a, l)| a * l).sum();
+        for (s, eps) in s.iter_mut().zip(OUTLIER_GRID) {
+            // Σ_q p(q)·((1 − ε)·ℓ(q) + ε/Q) = (1 − ε)·Σ p ℓ + ε/Q
+            let mixed = (1.0 - eps) * pred + eps * uniform;
+            *s += mixed.max(f64::MIN_POSITIVE).ln();
+        }
+    }
+    unit.2 += 1;
+}
+
+/// Pass 2: each held-out frame scored against the other blocks' map, for every τ; per
+/// calculus, the scores summed over units (each unit's mean over its frames) and the units.
+fn held_out_scores(
+    calculi: &[Calculus],
+    scans: &[Scan],
+    config: PqrmConfig,
+    options: &TemperOptions,
+    blocks: &[HashMap<LandmarkSet, BlockSums>],
+    progress: &dyn Progress,
+) -> Result<(Vec<Vec<f64>>, Vec<usize>)> {
+    let (n, k) = (scans.len(), options.folds);
     let g = options.grid.len() * OUTLIER_GRID.len();
     let score_floor = config.floor.max(SCORE_FLOOR);
     let mut totals = vec![vec![0.0; g]; calculi.len()];
     let mut units = vec![0usize; calculi.len()];
-    // per calculus, for the current block: triplet → (p_τ for each τ, summed scores, frames)
-    type Unit = (Vec<Vec<f64>>, Vec<f64>, u32);
-    // (ordered maps: the scores are summed in one order whatever the thread count)
+    // per calculus, the current block's units (ordered maps: the scores are summed in one
+    // order whatever the thread count)
     let mut current: Vec<BTreeMap<LandmarkSet, Unit>> =
         calculi.iter().map(|_| BTreeMap::new()).collect();
-    let flush = |current: &mut Vec<BTreeMap<LandmarkSet, Unit>>,
-                 totals: &mut Vec<Vec<f64>>,
-                 units: &mut Vec<usize>| {
+    let mut flush = |current: &mut Vec<BTreeMap<LandmarkSet, Unit>>| {
         for (ci, m) in current.iter_mut().enumerate() {
             for (_, (_, sums, frames)) in std::mem::take(m) {
                 units[ci] += 1;
@@ -358,115 +437,94 @@ pub fn fit_temper(
         progress.tick();
         let b = block_of(i, n, k);
         if b != block {
-            flush(&mut current, &mut totals, &mut units);
+            flush(&mut current);
             block = b;
         }
         if scan.observations.len() < 3 {
             continue;
         }
-        for (ci, counts) in frame_counts(i, scan)?.into_iter().enumerate() {
+        for (ci, counts) in frame_counts(calculi, config, i, scan)?
+            .into_iter()
+            .enumerate()
+        {
             let q = calculi[ci].n_states();
             for (set, c) in &counts {
                 let Some(e) = blocks[ci].get(&set) else {
                     continue;
                 };
-                let trained: u32 = e.frames.iter().sum::<u32>() - e.frames[b];
-                if trained == 0 {
-                    continue;
+                if e.frames.iter().sum::<u32>() == e.frames[b] {
+                    continue; // seen in this block only: nothing trained to predict it
                 }
-                let unit = current[ci].entry(set).or_insert_with(|| {
-                    let train: Vec<f64> = (0..q)
-                        .map(|s| {
-                            (0..k)
-                                .filter(|&bb| bb != b)
-                                .map(|bb| e.sums[bb * q + s])
-                                .sum()
-                        })
-                        .collect();
-                    let beliefs = options
-                        .grid
-                        .iter()
-                        .map(|tau| {
-                            normalise(train.iter().map(|v| tau * v).collect())
-                                .into_iter()
-                                .map(f64::exp)
-                                .collect()
-                        })
-                        .collect();
-                    (beliefs, vec![0.0; g], 0)
-                });
+                let unit = current[ci]
+                    .entry(set)
+                    .or_insert_with(|| trained_unit(e, b, q, k, options));
                 let seen: Vec<f64> = log_likelihood(c, score_floor)
                     .into_iter()
                     .map(f64::exp)
                     .collect();
-                let uniform = 1.0 / q as f64;
-                for (s, p) in unit.1.chunks_mut(OUTLIER_GRID.len()).zip(&unit.0) {
-                    let pred: f64 = p.iter().zip(&seen).map(|(a, l)| a * l).sum();
-                    for (s, eps) in s.iter_mut().zip(OUTLIER_GRID) {
-                        // Σ_q p(q)·((1 − ε)·ℓ(q) + ε/Q) = (1 − ε)·Σ p ℓ + ε/Q
-                        let mixed = (1.0 - eps) * pred + eps * uniform;
-                        *s += mixed.max(f64::MIN_POSITIVE).ln();
-                    }
-                }
-                unit.2 += 1;
+                score_into(unit, &seen);
             }
         }
     }
-    flush(&mut current, &mut totals, &mut units);
+    flush(&mut current);
+    Ok((totals, units))
+}
 
-    calculi
+/// The τ of one calculus: each τ's score is its best over the outlier rates (a profile
+/// likelihood); the best score wins, the larger τ on a tie.
+fn choose(
+    calc: &Calculus,
+    k: usize,
+    options: &TemperOptions,
+    totals: &[f64],
+    units: usize,
+) -> Result<TemperFit> {
+    if units == 0 {
+        return Err(PqrmError::Mismatch(format!(
+            "{}: no triplet is seen both inside and outside one of the {k} blocks of \
+             frames; nothing to choose τ by",
+            calc.name()
+        )));
+    }
+    let scores: Vec<TemperScore> = options
+        .grid
         .iter()
-        .enumerate()
-        .map(|(ci, calc)| {
-            if units[ci] == 0 {
-                return Err(PqrmError::Mismatch(format!(
-                    "{}: no triplet is seen both inside and outside one of the {k} blocks of \
-                     frames; nothing to choose τ by",
-                    calc.name()
-                )));
+        .zip(totals.chunks(OUTLIER_GRID.len()))
+        .map(|(&temper, t)| {
+            let (e, best) = t
+                .iter()
+                .enumerate()
+                .fold(
+                    (0, f64::NEG_INFINITY),
+                    |b, (e, v)| {
+                        if *v > b.1 { (e, *v) } else { b }
+                    },
+                );
+            TemperScore {
+                temper,
+                outlier_rate: OUTLIER_GRID[e],
+                log_score: best / units as f64,
             }
-            // each τ's score is its best over the outlier rates (a profile likelihood)
-            let scores: Vec<TemperScore> = options
-                .grid
-                .iter()
-                .zip(totals[ci].chunks(OUTLIER_GRID.len()))
-                .map(|(&temper, t)| {
-                    let (e, best) =
-                        t.iter()
-                            .enumerate()
-                            .fold(
-                                (0, f64::NEG_INFINITY),
-                                |b, (e, v)| {
-                                    if *v > b.1 { (e, *v) } else { b }
-                                },
-                            );
-                    TemperScore {
-                        temper,
-                        outlier_rate: OUTLIER_GRID[e],
-                        log_score: best / units[ci] as f64,
-                    }
-                })
-                .collect();
-            let best = scores
-                .iter()
-                .fold(None::<TemperScore>, |best, s| match best {
-                    Some(b)
-                        if b.log_score > s.log_score
-                            || (b.log_score == s.log_score && b.temper >= s.temper) =>
-                    {
-                        Some(b)
-                    }
-                    _ => Some(*s),
-                });
-            Ok(TemperFit {
-                calculus: calc.name().to_owned(),
-                chosen: best.map_or(1.0, |b| b.temper),
-                folds: k,
-                units: units[ci],
-                scores,
-            })
         })
-        .collect()
+        .collect();
+    let best = scores
+        .iter()
+        .fold(None::<TemperScore>, |best, s| match best {
+            Some(b)
+                if b.log_score > s.log_score
+                    || (b.log_score == s.log_score && b.temper >= s.temper) =>
+            {
+                Some(b)
+            }
+            _ => Some(*s),
+        });
+    Ok(TemperFit {
+        calculus: calc.name().to_owned(),
+        chosen: best.map_or(1.0, |b| b.temper),
+        folds: k,
+        units,
+        scores,
+    })
 }
 
 #[cfg(test)]

@@ -315,27 +315,16 @@ impl<'a, P: Perception> Navigator<'a, P> {
                     if !self.search_link(&mut w, e, goal, &mut commands)? {
                         // a contingency like a failed transition: plan to another element
                         // holding the goal, never back into this one
-                        if !self.config.replan || out.replans >= self.config.max_replans {
-                            out.failure = Some(Failure::InsufficientFeatures);
-                            break;
-                        }
-                        out.replans += 1;
                         failed_goals.insert(e);
-                        for src in self.graph.graph().neighbors_directed(
-                            petgraph::graph::NodeIndex::new(e),
-                            petgraph::Direction::Incoming,
-                        ) {
-                            excluded.insert((src.index(), e));
-                        }
-                        match self.localise(&mut w, range) {
-                            Some(s) => starts = s,
-                            None => {
-                                out.failure = Some(Failure::InsufficientFeatures);
-                                break;
-                            }
-                        }
+                        excluded.extend(self.edges_into(e));
                         first = false;
-                        continue;
+                        match self.recover(&mut w, &mut out, range) {
+                            Some(s) => {
+                                starts = s;
+                                continue;
+                            }
+                            None => break,
+                        }
                     }
                 }
                 out.success = true;
@@ -362,29 +351,10 @@ impl<'a, P: Perception> Navigator<'a, P> {
                 Err(e) => return Err(e),
             };
             if first {
-                out.plan_len = plan.len();
-                out.bound =
-                    (2.0 * std::f64::consts::PI + 1.0) * self.config.map_range * plan.len() as f64;
-                out.bound_direct = self.config.map_range * plan.len() as f64;
-                out.plan.clone_from(&plan.elements);
+                self.note_first_plan(&mut out, &plan);
                 first = false;
             }
-            let mut failed = None;
-            for (k, pair) in plan.elements.windows(2).enumerate() {
-                let next = match plan.elements.get(k + 2) {
-                    Some(&n) => Next::Element(n),
-                    None => Next::Goal(goal),
-                };
-                let mut rec = self.transition(&mut w, pair[0], pair[1], next)?;
-                rec.end = w.pos;
-                let ok = rec.success;
-                out.transitions.push(rec);
-                if !ok {
-                    failed = Some((pair[0], pair[1]));
-                    break;
-                }
-            }
-            match failed {
+            match self.follow(&mut w, &plan, goal, &mut out)? {
                 None => {
                     // the plan's last element holds the goal: the check above ends the run
                     let last = plan.elements.last().copied();
@@ -394,23 +364,80 @@ impl<'a, P: Perception> Navigator<'a, P> {
                     starts.dedup();
                 }
                 Some(edge) => {
-                    if !self.config.replan || out.replans >= self.config.max_replans {
-                        out.failure = Some(Failure::InsufficientFeatures);
-                        break;
-                    }
-                    out.replans += 1;
                     excluded.insert(edge);
-                    match self.localise(&mut w, range) {
+                    match self.recover(&mut w, &mut out, range) {
                         Some(s) => starts = s,
-                        None => {
-                            out.failure = Some(Failure::InsufficientFeatures);
-                            break;
-                        }
+                        None => break,
                     }
                 }
             }
         }
         Ok(self.finish(out, w))
+    }
+
+    /// The Link Graph's edges into element `e` (what a failed search of `e` excludes).
+    fn edges_into(&self, e: usize) -> Vec<(usize, usize)> {
+        self.graph
+            .graph()
+            .neighbors_directed(
+                petgraph::graph::NodeIndex::new(e),
+                petgraph::Direction::Incoming,
+            )
+            .map(|src| (src.index(), e))
+            .collect()
+    }
+
+    /// A contingency (a failed transition or goal search): localise again and re-plan, if
+    /// re-planning is on and its budget allows; `None` (the run failed for lack of
+    /// features) otherwise.
+    fn recover(
+        &self,
+        w: &mut Walker<'_, P>,
+        out: &mut NavOutcome,
+        range: f64,
+    ) -> Option<Vec<usize>> {
+        if !self.config.replan || out.replans >= self.config.max_replans {
+            out.failure = Some(Failure::InsufficientFeatures);
+            return None;
+        }
+        out.replans += 1;
+        let starts = self.localise(w, range);
+        if starts.is_none() {
+            out.failure = Some(Failure::InsufficientFeatures);
+        }
+        starts
+    }
+
+    /// The first plan's length, the two bounds of Propositions 1–2 for it, its elements.
+    fn note_first_plan(&self, out: &mut NavOutcome, plan: &Plan) {
+        out.plan_len = plan.len();
+        out.bound = (2.0 * std::f64::consts::PI + 1.0) * self.config.map_range * plan.len() as f64;
+        out.bound_direct = self.config.map_range * plan.len() as f64;
+        out.plan.clone_from(&plan.elements);
+    }
+
+    /// Follows `plan` transition by transition; the first edge that failed, if one did.
+    fn follow(
+        &self,
+        w: &mut Walker<'_, P>,
+        plan: &Plan,
+        goal: u32,
+        out: &mut NavOutcome,
+    ) -> Result<Option<(usize, usize)>> {
+        for (k, pair) in plan.elements.windows(2).enumerate() {
+            let next = match plan.elements.get(k + 2) {
+                Some(&n) => Next::Element(n),
+                None => Next::Goal(goal),
+            };
+            let mut rec = self.transition(w, pair[0], pair[1], next)?;
+            rec.end = w.pos;
+            let ok = rec.success;
+            out.transitions.push(rec);
+            if !ok {
+                return Ok(Some((pair[0], pair[1])));
+            }
+        }
+        Ok(None)
     }
 
     fn finish(&self, mut out: NavOutcome, w: Walker<'_, P>) -> NavOutcome {

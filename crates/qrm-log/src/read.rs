@@ -398,6 +398,60 @@ impl Iterator for Records<'_> {
 /// that cannot be decoded or is not valid PQRM input, [`LogError::Invalid`] for bad options.
 pub fn read_mcap_bytes(bytes: &[u8], path: &Path, options: &ReadOptions) -> Result<Recording> {
     options.validate()?;
+    let Indexed {
+        mut channels,
+        truth,
+        damage,
+    } = index_records(bytes, path, options)?;
+    let chosen = choose(&mut channels, path, options)?;
+    let from_scans = chosen
+        .iter()
+        .any(|id| channels[id].info.kind.is_some_and(Kind::is_scan));
+    let (mut scans, range_scans) = decode_chosen(&channels, &chosen, path, options)?;
+    if from_scans {
+        scans = recognise(range_scans, &channels, &chosen, path, options)?;
+    }
+    // A scan that saw nothing carries no evidence (and a CSV has no row for it).
+    scans.retain(|s| !s.observations.is_empty());
+    scans.sort_by(|a, b| a.t.total_cmp(&b.t).then(a.robot.cmp(&b.robot)));
+    let truth = match truth {
+        Some(entries) if !from_scans => Some(parse_truth(&entries, path)?),
+        _ => None,
+    };
+    for (order, id) in chosen.iter().enumerate() {
+        if let Some(c) = channels.get_mut(id) {
+            c.info.used = true;
+            c.info.robot = c
+                .metadata
+                .get("robot")
+                .and_then(|r| r.trim().parse().ok())
+                .unwrap_or(u32::try_from(order).unwrap_or(u32::MAX));
+        }
+    }
+    Ok(Recording {
+        dataset: Dataset {
+            scans,
+            truth,
+            skipped: 0,
+        },
+        topics: channels.into_values().map(|c| c.info).collect(),
+        from_scans,
+        damage,
+    })
+}
+
+/// What one pass over a log's records gathers: its channels with their raw messages, the
+/// surveyed landmarks' metadata, and where a damaged file stopped.
+struct Indexed {
+    channels: BTreeMap<u16, Channel>,
+    truth: Option<BTreeMap<String, String>>,
+    damage: Option<String>,
+}
+
+/// One pass over the records: schemas, channels, messages kept raw for the readable
+/// channels, the truth metadata. A broken record stops the pass (with `allow_truncated`)
+/// or fails it, saying how many messages came before.
+fn index_records(bytes: &[u8], path: &Path, options: &ReadOptions) -> Result<Indexed> {
     let mut channels: BTreeMap<u16, Channel> = BTreeMap::new();
     check_plain_chunks(bytes).map_err(|source| LogError::Damaged {
         path: path.to_path_buf(),
@@ -407,21 +461,30 @@ pub fn read_mcap_bytes(bytes: &[u8], path: &Path, options: &ReadOptions) -> Resu
     })?;
     let mut schemas: BTreeMap<u16, (String, String)> = BTreeMap::new();
     let mut truth = None;
-    let mut damage = None;
     let mut count = 0usize;
+    // A broken record: with `allow_truncated` the pass stops there (`said` messages
+    // before it), else it fails (`read` messages read whole).
+    let stopped = |source, said: usize, read: usize, channels: &BTreeMap<u16, Channel>| {
+        if options.allow_truncated {
+            Ok(format!("stopped after {said} messages: {source}"))
+        } else {
+            Err(LogError::Damaged {
+                path: path.to_path_buf(),
+                messages: read,
+                present: present(channels),
+                source,
+            })
+        }
+    };
     for record in Records::new(bytes) {
         let record = match record {
             Ok(r) => r,
-            Err(source) if options.allow_truncated => {
-                damage = Some(format!("stopped after {count} messages: {source}"));
-                break;
-            }
             Err(source) => {
-                return Err(LogError::Damaged {
-                    path: path.to_path_buf(),
-                    messages: count,
-                    present: present(&channels),
-                    source,
+                let damage = Some(stopped(source, count, count, &channels)?);
+                return Ok(Indexed {
+                    channels,
+                    truth,
+                    damage,
                 });
             }
         };
@@ -435,15 +498,11 @@ pub fn read_mcap_bytes(bytes: &[u8], path: &Path, options: &ReadOptions) -> Resu
                 let Some(c) = channels.get_mut(&header.channel_id) else {
                     let source =
                         mcap::McapError::UnknownChannel(header.sequence, header.channel_id);
-                    if options.allow_truncated {
-                        damage = Some(format!("stopped after {count} messages: {source}"));
-                        break;
-                    }
-                    return Err(LogError::Damaged {
-                        path: path.to_path_buf(),
-                        messages: count - 1,
-                        present: present(&channels),
-                        source,
+                    let damage = Some(stopped(source, count, count - 1, &channels)?);
+                    return Ok(Indexed {
+                        channels,
+                        truth,
+                        damage,
                     });
                 };
                 c.info.messages += 1;
@@ -457,10 +516,25 @@ pub fn read_mcap_bytes(bytes: &[u8], path: &Path, options: &ReadOptions) -> Resu
             _ => {}
         }
     }
-    let chosen = choose(&mut channels, path, options)?;
-    let from_scans = chosen
-        .iter()
-        .any(|id| channels[id].info.kind.is_some_and(Kind::is_scan));
+    Ok(Indexed {
+        channels,
+        truth,
+        damage: None,
+    })
+}
+
+/// The chosen channels' messages decoded: detections as scans, lidar scans kept for the
+/// recogniser (with their robot, channel order and index).
+#[allow(clippy::type_complexity)] // the recogniser's input, named where it is consumed
+fn decode_chosen(
+    channels: &BTreeMap<u16, Channel>,
+    chosen: &[u16],
+    path: &Path,
+    options: &ReadOptions,
+) -> Result<(
+    Vec<Scan>,
+    Vec<(crate::decode::RangeScan, u32, usize, usize)>,
+)> {
     let limits = (options.range_min, options.range_max);
     let mut scans = Vec::new();
     let mut range_scans = Vec::new();
@@ -520,36 +594,7 @@ pub fn read_mcap_bytes(bytes: &[u8], path: &Path, options: &ReadOptions) -> Resu
             }
         }
     }
-    if from_scans {
-        scans = recognise(range_scans, &channels, &chosen, path, options)?;
-    }
-    // A scan that saw nothing carries no evidence (and a CSV has no row for it).
-    scans.retain(|s| !s.observations.is_empty());
-    scans.sort_by(|a, b| a.t.total_cmp(&b.t).then(a.robot.cmp(&b.robot)));
-    let truth = match truth {
-        Some(entries) if !from_scans => Some(parse_truth(&entries, path)?),
-        _ => None,
-    };
-    for (order, id) in chosen.iter().enumerate() {
-        if let Some(c) = channels.get_mut(id) {
-            c.info.used = true;
-            c.info.robot = c
-                .metadata
-                .get("robot")
-                .and_then(|r| r.trim().parse().ok())
-                .unwrap_or(u32::try_from(order).unwrap_or(u32::MAX));
-        }
-    }
-    Ok(Recording {
-        dataset: Dataset {
-            scans,
-            truth,
-            skipped: 0,
-        },
-        topics: channels.into_values().map(|c| c.info).collect(),
-        from_scans,
-        damage,
-    })
+    Ok((scans, range_scans))
 }
 
 /// The channels to read, in topic order.

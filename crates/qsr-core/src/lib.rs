@@ -69,6 +69,7 @@ mod builtin;
 mod calculus;
 mod compose;
 pub mod coverage;
+mod describe;
 mod error;
 mod frame;
 mod merge;

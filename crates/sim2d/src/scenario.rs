@@ -86,241 +86,271 @@ fn uniform_landmarks(
 /// [`SimError::UnknownScenario`]; world errors.
 pub fn scenario(name: &str, seed: u64, world: Option<WorldSpec>) -> Result<Scenario> {
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
-    let lidar = LidarConfig::default();
-    let (spec, start, waypoints, speed, frame_period, detector) = match name {
-        "pqrm-100" => {
-            let spec = WorldSpec {
-                bounds: [0.0, 100.0, 0.0, 100.0],
-                landmarks: uniform_landmarks(&mut rng, 10, 100.0, 0.1, 0.0),
-                ..WorldSpec::default()
-            };
-            let pts: Vec<[f64; 2]> = (0..=23)
-                .map(|k| (f64::from(k) * 16.0).to_radians())
-                .map(|a| [50.0 + 50.0 * a.cos(), 50.0 + 50.0 * a.sin()])
-                .collect();
-            let step = 2.0 * 50.0 * (8f64.to_radians()).sin(); // chord of 16°
-            let det = DetectorConfig {
-                range: 60.0,
-                full_occlusion: false,
-                noise: DetectorNoise::Cartesian { sigma: 5.0 },
-            };
-            (
-                spec,
-                Pose {
-                    x: 100.0,
-                    y: 50.0,
-                    theta: std::f64::consts::FRAC_PI_2,
-                },
-                pts[1..].to_vec(),
-                2.0,
-                step / 2.0,
-                det,
-            )
-        }
-        "qlink-200" => {
-            let spec = WorldSpec {
-                bounds: [0.0, 200.0, 0.0, 200.0],
-                landmarks: uniform_landmarks(&mut rng, 200, 200.0, 0.3, 2.0),
-                ..WorldSpec::default()
-            };
-            let mut pts = Vec::new();
-            for (i, x) in (0..=10).map(|k| 10.0 + 18.0 * f64::from(k)).enumerate() {
-                let (a, b) = if i % 2 == 0 {
-                    (5.0, 195.0)
-                } else {
-                    (195.0, 5.0)
-                };
-                pts.push([x, a]);
-                pts.push([x, b]);
-            }
-            let det = DetectorConfig {
-                range: 20.0,
-                full_occlusion: true,
-                noise: DetectorNoise::Cartesian { sigma: 0.3 },
-            };
-            (
-                spec,
-                Pose {
-                    x: 10.0,
-                    y: 0.0,
-                    theta: std::f64::consts::FRAC_PI_2,
-                },
-                pts,
-                2.0,
-                2.0,
-                det,
-            )
-        }
-        "hallway" => {
-            let mut landmarks = Vec::new();
-            for k in 0..20 {
-                let x = 3.0 * f64::from(k);
-                landmarks.push(PointLandmark {
-                    id: 2 * k as u32,
-                    pos: [x, 3.0],
-                    radius: 0.1,
-                });
-                landmarks.push(PointLandmark {
-                    id: 2 * k as u32 + 1,
-                    pos: [x + 1.5, -3.0],
-                    radius: 0.1,
-                });
-            }
-            let spec = WorldSpec {
-                bounds: [-5.0, 65.0, -6.0, 6.0],
-                landmarks,
-                ..WorldSpec::default()
-            };
-            let det = DetectorConfig {
-                range: 15.0,
-                full_occlusion: false,
-                noise: DetectorNoise::Cartesian {
-                    sigma: 0.1f64.sqrt(),
-                },
-            };
-            (
-                spec,
-                Pose {
-                    x: -3.0,
-                    y: 0.0,
-                    theta: 0.0,
-                },
-                vec![[62.0, 0.0]],
-                1.0,
-                1.0,
-                det,
-            )
-        }
-        "field" => {
-            let mut landmarks = Vec::new();
-            let mut clutter = Vec::new();
-            let mut id = 0u32;
-            // Dense pines north of the corridor's end.
-            for _ in 0..45 {
-                landmarks.push(PointLandmark {
-                    id,
-                    pos: [rng.random_range(45.0..80.0), rng.random_range(20.0..45.0)],
-                    radius: rng.random_range(0.15..0.3),
-                });
-                id += 1;
-            }
-            // Sparse posts in the open field to the east.
-            for _ in 0..8 {
-                landmarks.push(PointLandmark {
-                    id,
-                    pos: [rng.random_range(90.0..150.0), rng.random_range(-30.0..30.0)],
-                    radius: 0.2,
-                });
-                id += 1;
-            }
-            // Uneven ground: returns that are not landmarks.
-            for _ in 0..25 {
-                clutter.push(Clutter {
-                    pos: [rng.random_range(90.0..150.0), rng.random_range(-30.0..30.0)],
-                    radius: rng.random_range(0.3..1.0),
-                });
-            }
-            // Posts and bins in front of the buildings, bollards inside the corridor and a
-            // few trees by its far end, so the wall-pair relation has front, between and
-            // behind states (drawn last: the pines, posts and clutter above are unchanged).
-            let sides = |rng: &mut ChaCha8Rng| if rng.random::<bool>() { 1.0 } else { -1.0 };
-            for _ in 0..6 {
-                let side = sides(&mut rng);
-                landmarks.push(PointLandmark {
-                    id,
-                    pos: [
-                        rng.random_range(-16.0..-2.0),
-                        side * rng.random_range(9.0..14.0),
-                    ],
-                    radius: rng.random_range(0.3..0.45),
-                });
-                id += 1;
-            }
-            for k in 0..4 {
-                landmarks.push(PointLandmark {
-                    id,
-                    pos: [
-                        rng.random_range(4.0..36.0),
-                        if k % 2 == 0 { 5.5 } else { -5.5 },
-                    ],
-                    radius: 0.3,
-                });
-                id += 1;
-            }
-            for _ in 0..5 {
-                landmarks.push(PointLandmark {
-                    id,
-                    pos: [rng.random_range(44.0..56.0), rng.random_range(-14.0..14.0)],
-                    radius: rng.random_range(0.25..0.35),
-                });
-                id += 1;
-            }
-            // Remove pines overlapping each other (the detector assumes disjoint discs).
-            let mut kept: Vec<PointLandmark> = Vec::new();
-            for l in landmarks {
-                if kept.iter().all(|k| {
-                    (k.pos[0] - l.pos[0]).hypot(k.pos[1] - l.pos[1]) > k.radius + l.radius + 0.5
-                }) {
-                    kept.push(l);
-                }
-            }
-            let walls = vec![
-                Wall {
-                    id: 1000,
-                    start: [0.0, -7.5],
-                    end: [40.0, -7.5],
-                },
-                Wall {
-                    id: 1001,
-                    start: [0.0, 7.5],
-                    end: [40.0, 7.5],
-                },
-            ];
-            let spec = WorldSpec {
-                bounds: [-20.0, 160.0, -40.0, 50.0],
-                landmarks: kept,
-                walls,
-                clutter,
-            };
-            let det = DetectorConfig {
-                range: 60.0,
-                full_occlusion: true,
-                noise: DetectorNoise::Cartesian { sigma: 0.7 },
-            };
-            let path = vec![
-                [40.0, 0.0],
-                [60.0, 10.0],
-                [85.0, 30.0],
-                [110.0, 10.0],
-                [140.0, -15.0],
-                [120.0, -25.0],
-            ];
-            (
-                spec,
-                Pose {
-                    x: -10.0,
-                    y: 0.0,
-                    theta: 0.0,
-                },
-                path,
-                1.5,
-                1.0,
-                det,
-            )
-        }
+    let layout = match name {
+        "pqrm-100" => pqrm_100(&mut rng),
+        "qlink-200" => qlink_200(&mut rng),
+        "hallway" => hallway(),
+        "field" => field(&mut rng),
         other => return Err(SimError::UnknownScenario(other.to_owned())),
     };
-    let spec = world.unwrap_or(spec);
     Ok(Scenario {
         name: name.to_owned(),
-        world: World::new(spec)?,
-        start,
-        waypoints,
-        speed,
-        frame_period,
-        detector,
-        lidar,
+        world: World::new(world.unwrap_or(layout.spec))?,
+        start: layout.start,
+        waypoints: layout.waypoints,
+        speed: layout.speed,
+        frame_period: layout.frame_period,
+        detector: layout.detector,
+        lidar: LidarConfig::default(),
     })
+}
+
+/// What a named scenario is made of, before its world is built.
+struct Layout {
+    spec: WorldSpec,
+    start: Pose,
+    waypoints: Vec<[f64; 2]>,
+    speed: f64,
+    frame_period: f64,
+    detector: DetectorConfig,
+}
+
+/// Thesis §2.3: ten landmarks in a 100 m square, a circle driven about its centre, a noisy
+/// detector of 60 m range.
+fn pqrm_100(rng: &mut ChaCha8Rng) -> Layout {
+    let spec = WorldSpec {
+        bounds: [0.0, 100.0, 0.0, 100.0],
+        landmarks: uniform_landmarks(rng, 10, 100.0, 0.1, 0.0),
+        ..WorldSpec::default()
+    };
+    let pts: Vec<[f64; 2]> = (0..=23)
+        .map(|k| (f64::from(k) * 16.0).to_radians())
+        .map(|a| [50.0 + 50.0 * a.cos(), 50.0 + 50.0 * a.sin()])
+        .collect();
+    let step = 2.0 * 50.0 * (8f64.to_radians()).sin(); // chord of 16°
+    let det = DetectorConfig {
+        range: 60.0,
+        full_occlusion: false,
+        noise: DetectorNoise::Cartesian { sigma: 5.0 },
+    };
+    Layout {
+        spec,
+        start: Pose {
+            x: 100.0,
+            y: 50.0,
+            theta: std::f64::consts::FRAC_PI_2,
+        },
+        waypoints: pts[1..].to_vec(),
+        speed: 2.0,
+        frame_period: step / 2.0,
+        detector: det,
+    }
+}
+
+/// Thesis §4.4.1: 200 landmarks in a 200 m square, a boustrophedon drive, a 20 m detector
+/// with full occlusion.
+fn qlink_200(rng: &mut ChaCha8Rng) -> Layout {
+    let spec = WorldSpec {
+        bounds: [0.0, 200.0, 0.0, 200.0],
+        landmarks: uniform_landmarks(rng, 200, 200.0, 0.3, 2.0),
+        ..WorldSpec::default()
+    };
+    let mut pts = Vec::new();
+    for (i, x) in (0..=10).map(|k| 10.0 + 18.0 * f64::from(k)).enumerate() {
+        let (a, b) = if i % 2 == 0 {
+            (5.0, 195.0)
+        } else {
+            (195.0, 5.0)
+        };
+        pts.push([x, a]);
+        pts.push([x, b]);
+    }
+    let det = DetectorConfig {
+        range: 20.0,
+        full_occlusion: true,
+        noise: DetectorNoise::Cartesian { sigma: 0.3 },
+    };
+    Layout {
+        spec,
+        start: Pose {
+            x: 10.0,
+            y: 0.0,
+            theta: std::f64::consts::FRAC_PI_2,
+        },
+        waypoints: pts,
+        speed: 2.0,
+        frame_period: 2.0,
+        detector: det,
+    }
+}
+
+/// Thesis §3.4: two rows of landmarks 6 m apart, a drive down the middle.
+fn hallway() -> Layout {
+    let mut landmarks = Vec::new();
+    for k in 0..20 {
+        let x = 3.0 * f64::from(k);
+        landmarks.push(PointLandmark {
+            id: 2 * k as u32,
+            pos: [x, 3.0],
+            radius: 0.1,
+        });
+        landmarks.push(PointLandmark {
+            id: 2 * k as u32 + 1,
+            pos: [x + 1.5, -3.0],
+            radius: 0.1,
+        });
+    }
+    let spec = WorldSpec {
+        bounds: [-5.0, 65.0, -6.0, 6.0],
+        landmarks,
+        ..WorldSpec::default()
+    };
+    let det = DetectorConfig {
+        range: 15.0,
+        full_occlusion: false,
+        noise: DetectorNoise::Cartesian {
+            sigma: 0.1f64.sqrt(),
+        },
+    };
+    Layout {
+        spec,
+        start: Pose {
+            x: -3.0,
+            y: 0.0,
+            theta: 0.0,
+        },
+        waypoints: vec![[62.0, 0.0]],
+        speed: 1.0,
+        frame_period: 1.0,
+        detector: det,
+    }
+}
+
+/// The field site's landmarks (pines, posts, bins, bollards, trees; overlapping ones
+/// removed) and its clutter, drawn in this order from `rng`.
+fn field_landmarks(rng: &mut ChaCha8Rng) -> (Vec<PointLandmark>, Vec<Clutter>) {
+    let mut landmarks = Vec::new();
+    let mut clutter = Vec::new();
+    let mut id = 0u32;
+    // Dense pines north of the corridor's end.
+    for _ in 0..45 {
+        landmarks.push(PointLandmark {
+            id,
+            pos: [rng.random_range(45.0..80.0), rng.random_range(20.0..45.0)],
+            radius: rng.random_range(0.15..0.3),
+        });
+        id += 1;
+    }
+    // Sparse posts in the open field to the east.
+    for _ in 0..8 {
+        landmarks.push(PointLandmark {
+            id,
+            pos: [rng.random_range(90.0..150.0), rng.random_range(-30.0..30.0)],
+            radius: 0.2,
+        });
+        id += 1;
+    }
+    // Uneven ground: returns that are not landmarks.
+    for _ in 0..25 {
+        clutter.push(Clutter {
+            pos: [rng.random_range(90.0..150.0), rng.random_range(-30.0..30.0)],
+            radius: rng.random_range(0.3..1.0),
+        });
+    }
+    // Posts and bins in front of the buildings, bollards inside the corridor and a
+    // few trees by its far end, so the wall-pair relation has front, between and
+    // behind states (drawn last: the pines, posts and clutter above are unchanged).
+    let sides = |rng: &mut ChaCha8Rng| if rng.random::<bool>() { 1.0 } else { -1.0 };
+    for _ in 0..6 {
+        let side = sides(rng);
+        landmarks.push(PointLandmark {
+            id,
+            pos: [
+                rng.random_range(-16.0..-2.0),
+                side * rng.random_range(9.0..14.0),
+            ],
+            radius: rng.random_range(0.3..0.45),
+        });
+        id += 1;
+    }
+    for k in 0..4 {
+        landmarks.push(PointLandmark {
+            id,
+            pos: [
+                rng.random_range(4.0..36.0),
+                if k % 2 == 0 { 5.5 } else { -5.5 },
+            ],
+            radius: 0.3,
+        });
+        id += 1;
+    }
+    for _ in 0..5 {
+        landmarks.push(PointLandmark {
+            id,
+            pos: [rng.random_range(44.0..56.0), rng.random_range(-14.0..14.0)],
+            radius: rng.random_range(0.25..0.35),
+        });
+        id += 1;
+    }
+    // Remove pines overlapping each other (the detector assumes disjoint discs).
+    let mut kept: Vec<PointLandmark> = Vec::new();
+    for l in landmarks {
+        if kept
+            .iter()
+            .all(|k| (k.pos[0] - l.pos[0]).hypot(k.pos[1] - l.pos[1]) > k.radius + l.radius + 0.5)
+        {
+            kept.push(l);
+        }
+    }
+    (kept, clutter)
+}
+
+/// Thesis §4.4.2: the field site — a corridor between two buildings, pines, posts, clutter.
+fn field(rng: &mut ChaCha8Rng) -> Layout {
+    let (kept, clutter) = field_landmarks(rng);
+    let walls = vec![
+        Wall {
+            id: 1000,
+            start: [0.0, -7.5],
+            end: [40.0, -7.5],
+        },
+        Wall {
+            id: 1001,
+            start: [0.0, 7.5],
+            end: [40.0, 7.5],
+        },
+    ];
+    let spec = WorldSpec {
+        bounds: [-20.0, 160.0, -40.0, 50.0],
+        landmarks: kept,
+        walls,
+        clutter,
+    };
+    let det = DetectorConfig {
+        range: 60.0,
+        full_occlusion: true,
+        noise: DetectorNoise::Cartesian { sigma: 0.7 },
+    };
+    let path = vec![
+        [40.0, 0.0],
+        [60.0, 10.0],
+        [85.0, 30.0],
+        [110.0, 10.0],
+        [140.0, -15.0],
+        [120.0, -25.0],
+    ];
+    Layout {
+        spec,
+        start: Pose {
+            x: -10.0,
+            y: 0.0,
+            theta: 0.0,
+        },
+        waypoints: path,
+        speed: 1.5,
+        frame_period: 1.0,
+        detector: det,
+    }
 }
 
 impl Scenario {

@@ -592,6 +592,27 @@ pub struct Report {
 }
 
 impl Report {
+    /// The report on a terminal: each table in the report (`title:` then its columns
+    /// aligned), then each claim as `[verdict] what: thesis …; ours …`.
+    #[must_use]
+    pub fn to_terminal(&self) -> String {
+        let mut s = String::new();
+        for t in self.tables.iter().filter(|t| t.in_report) {
+            let _ = writeln!(s, "{}:\n{}", t.title, t.to_terminal());
+        }
+        for c in &self.claims {
+            let _ = writeln!(
+                s,
+                "[{}] {}: thesis {}; ours {}",
+                c.verdict.as_str(),
+                c.what,
+                c.thesis,
+                c.ours
+            );
+        }
+        s
+    }
+
     /// The report as markdown: title, set-up, tables, claims, notes, the files' names.
     #[must_use]
     pub fn to_markdown(&self) -> String {

@@ -23,14 +23,11 @@ impl NetworkFormat {
             Some('{') => Ok(Self::Json),
             Some('(') => Ok(Self::Sparq),
             Some(c) => Err(QsrError::Network {
-                at: "its first character".into(),
-                reason: format!(
-                    "cannot tell the network's form from `{c}` (JSON starts with `{{`, SparQ \
-                     with `(`)"
-                ),
+                at: format!("its first character `{c}`"),
+                reason: "JSON starts with `{`, SparQ with `(`".into(),
             }),
             None => Err(QsrError::Network {
-                at: "the start".into(),
+                at: "its start".into(),
                 reason: "empty input, expected a constraint network".into(),
             }),
         }
@@ -66,7 +63,7 @@ mod tests {
             NetworkFormat::Sparq
         );
         let e = NetworkFormat::detect("a b c").unwrap_err().to_string();
-        assert!(e.contains("`a`"), "{e}");
+        assert!(e.contains("`a`") && e.contains("SparQ with `(`"), "{e}");
         let e = NetworkFormat::detect(" \n").unwrap_err().to_string();
         assert!(e.contains("empty input"), "{e}");
     }
