@@ -288,13 +288,8 @@ impl<'a, P: Perception> Navigator<'a, P> {
             return Err(QlinkError::UnknownLandmark(goal));
         }
         let range = self.config.controller.radius;
-        let mut w = Walker::new(
-            self.perception,
-            start,
-            self.config.step,
-            self.config.sensing,
-            record,
-        );
+        let (step, sensing) = (self.config.step, self.config.sensing);
+        let mut w = Walker::new(self.perception, start, step, sensing, record);
         let mut out = NavOutcome::unfinished(None);
         let Some(mut starts) = self.localise(&mut w, range) else {
             out.failure = Some(Failure::NoStart);
@@ -310,45 +305,33 @@ impl<'a, P: Perception> Navigator<'a, P> {
                 .iter()
                 .find(|&&e| self.map.elements()[e].landmarks.contains(&goal))
             {
-                if self.config.find_goal && !self.perception.sees(w.pos, goal) {
-                    let mut commands = Vec::new();
-                    if !self.search_link(&mut w, e, goal, &mut commands)? {
-                        // a contingency like a failed transition: plan to another element
-                        // holding the goal, never back into this one
-                        failed_goals.insert(e);
-                        excluded.extend(self.edges_into(e));
-                        first = false;
-                        match self.recover(&mut w, &mut out, range) {
-                            Some(s) => {
-                                starts = s;
-                                continue;
-                            }
-                            None => break,
-                        }
-                    }
+                if self.goal_found(&mut w, e, goal)? {
+                    out.success = true;
+                    break;
                 }
-                out.success = true;
-                break;
+                // a contingency like a failed transition: plan to another element holding
+                // the goal, never back into this one
+                failed_goals.insert(e);
+                excluded.extend(self.edges_into(e));
+                first = false;
+                match self.recover(&mut w, &mut out, range) {
+                    Some(s) => {
+                        starts = s;
+                        continue;
+                    }
+                    None => break,
+                }
             }
             if starts.is_empty() {
                 out.failure = Some(Failure::InsufficientFeatures);
                 break;
             }
-            let plan: Result<Plan> = match (first, field) {
-                (true, Some(f)) => f.path_from(self.graph, &starts),
-                _ => self.graph.plan(self.map, &starts, goal, &excluded),
-            };
-            let plan = match plan {
+            let plan = match self.next_plan(first, field, &starts, goal, &excluded)? {
                 Ok(p) => p,
-                Err(QlinkError::NoPath { .. }) => {
-                    out.failure = Some(if first {
-                        Failure::NoPath
-                    } else {
-                        Failure::InsufficientFeatures
-                    });
+                Err(failure) => {
+                    out.failure = Some(failure);
                     break;
                 }
-                Err(e) => return Err(e),
             };
             if first {
                 self.note_first_plan(&mut out, &plan);
@@ -357,9 +340,8 @@ impl<'a, P: Perception> Navigator<'a, P> {
             match self.follow(&mut w, &plan, goal, &mut out)? {
                 None => {
                     // the plan's last element holds the goal: the check above ends the run
-                    let last = plan.elements.last().copied();
                     starts = self.map.elements_in_view(&self.perception.visible(w.pos));
-                    starts.extend(last);
+                    starts.extend(plan.elements.last().copied());
                     starts.sort_unstable();
                     starts.dedup();
                 }
@@ -373,6 +355,39 @@ impl<'a, P: Perception> Navigator<'a, P> {
             }
         }
         Ok(self.finish(out, w))
+    }
+
+    /// The plan from `starts` to the goal avoiding `excluded` (the first from the goal's
+    /// distance field when one is given); `Err(failure)` when there is none: no path at all
+    /// at the start, too few features after a contingency.
+    fn next_plan(
+        &self,
+        first: bool,
+        field: Option<&DistanceField>,
+        starts: &[usize],
+        goal: u32,
+        excluded: &BTreeSet<(usize, usize)>,
+    ) -> Result<std::result::Result<Plan, Failure>> {
+        let plan = match (first, field) {
+            (true, Some(f)) => f.path_from(self.graph, starts),
+            _ => self.graph.plan(self.map, starts, goal, excluded),
+        };
+        match plan {
+            Ok(p) => Ok(Ok(p)),
+            Err(QlinkError::NoPath { .. }) if first => Ok(Err(Failure::NoPath)),
+            Err(QlinkError::NoPath { .. }) => Ok(Err(Failure::InsufficientFeatures)),
+            Err(e) => Err(e),
+        }
+    }
+
+    /// In goal element `e`: whether the goal is in view, or found by searching `e`'s link
+    /// (when the navigator searches for it).
+    fn goal_found(&self, w: &mut Walker<'_, P>, e: usize, goal: u32) -> Result<bool> {
+        if !self.config.find_goal || self.perception.sees(w.pos, goal) {
+            return Ok(true);
+        }
+        let mut commands = Vec::new();
+        self.search_link(w, e, goal, &mut commands)
     }
 
     /// The Link Graph's edges into element `e` (what a failed search of `e` excludes).
@@ -615,6 +630,23 @@ impl<'a, P: Perception> Navigator<'a, P> {
         Ok(false)
     }
 
+    /// The landmark of edge (i, j)'s link set to search for: with β ≥ 2 the set has several,
+    /// and one the robot does not see yet is progress towards M_j's frame (a visible one is
+    /// not).
+    fn link_for(&self, pos: [f64; 2], i: usize, j: usize) -> u32 {
+        let links = self
+            .graph
+            .edge(i, j)
+            .map(|e| e.links().to_vec())
+            .unwrap_or_default();
+        links
+            .iter()
+            .copied()
+            .find(|&l| !self.perception.sees(pos, l))
+            .or(links.first().copied())
+            .unwrap_or(self.map.elements()[j].landmarks[0])
+    }
+
     fn transition(
         &self,
         w: &mut Walker<'_, P>,
@@ -623,20 +655,7 @@ impl<'a, P: Perception> Navigator<'a, P> {
         next: Next,
     ) -> Result<TransitionRecord> {
         let start_len = w.length;
-        let map = self.map;
-        let links = self
-            .graph
-            .edge(i, j)
-            .map(|e| e.links().to_vec())
-            .unwrap_or_default();
-        // with β ≥ 2 the link set has several landmarks: search for one the robot does not
-        // see yet (a visible one is no progress towards M_j's frame)
-        let link = links
-            .iter()
-            .copied()
-            .find(|&l| !self.perception.sees(w.pos, l))
-            .or(links.first().copied())
-            .unwrap_or(map.elements()[j].landmarks[0]);
+        let link = self.link_for(w.pos, i, j);
         let mut rec = TransitionRecord {
             from: i,
             to: j,
