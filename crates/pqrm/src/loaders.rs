@@ -337,6 +337,41 @@ fn dat_rows(path: &Path, names: &[&str]) -> Result<Vec<(usize, Vec<f64>)>> {
     Ok(out)
 }
 
+/// MRCLAM's `Landmark_Groundtruth.dat`: `subject x y x_std y_std`, each subject once.
+fn read_mrclam_truth(gt: &Path) -> Result<GroundTruth> {
+    let mut truth = GroundTruth::default();
+    for (line, v) in dat_rows(gt, &["subject", "x", "y", "x_std", "y_std"])? {
+        if v.len() < 3 {
+            return Err(parse_err(gt, line, "expected `subject x y ...`"));
+        }
+        let id = id_field(gt, line, "subject", v[0])?;
+        if truth.positions.contains_key(&LandmarkId(id)) {
+            return Err(parse_err(
+                gt,
+                line,
+                format!("subject {id} is surveyed twice"),
+            ));
+        }
+        truth.positions.insert(LandmarkId(id), [v[1], v[2]]);
+    }
+    Ok(truth)
+}
+
+/// MRCLAM's `Barcodes.dat`: `subject barcode`, as barcode → subject.
+fn read_mrclam_barcodes(bc: &Path) -> Result<BTreeMap<u32, u32>> {
+    let mut barcode_to_subject = BTreeMap::new();
+    for (line, v) in dat_rows(bc, &["subject", "barcode"])? {
+        if v.len() != 2 {
+            return Err(parse_err(bc, line, "expected `subject barcode`"));
+        }
+        barcode_to_subject.insert(
+            id_field(bc, line, "barcode", v[1])?,
+            id_field(bc, line, "subject", v[0])?,
+        );
+    }
+    Ok(barcode_to_subject)
+}
+
 /// Reads a MRCLAM dataset directory; the surveyed positions become the truth.
 ///
 /// # Errors
@@ -344,44 +379,8 @@ fn dat_rows(path: &Path, names: &[&str]) -> Result<Vec<(usize, Vec<f64>)>> {
 /// [`PqrmError::InvalidConfig`] for a negative noise.
 pub fn read_mrclam(dir: &Path, noise: RangeBearingNoise) -> Result<Dataset> {
     let file = |name: &str| -> PathBuf { dir.join(name) };
-    let mut truth = GroundTruth::default();
-    for (line, v) in dat_rows(
-        &file("Landmark_Groundtruth.dat"),
-        &["subject", "x", "y", "x_std", "y_std"],
-    )? {
-        if v.len() < 3 {
-            return Err(parse_err(
-                &file("Landmark_Groundtruth.dat"),
-                line,
-                "expected `subject x y ...`",
-            ));
-        }
-        let gt = file("Landmark_Groundtruth.dat");
-        let id = id_field(&gt, line, "subject", v[0])?;
-        if truth.positions.contains_key(&LandmarkId(id)) {
-            return Err(parse_err(
-                &gt,
-                line,
-                format!("subject {id} is surveyed twice"),
-            ));
-        }
-        truth.positions.insert(LandmarkId(id), [v[1], v[2]]);
-    }
-    let mut barcode_to_subject = BTreeMap::new();
-    for (line, v) in dat_rows(&file("Barcodes.dat"), &["subject", "barcode"])? {
-        if v.len() != 2 {
-            return Err(parse_err(
-                &file("Barcodes.dat"),
-                line,
-                "expected `subject barcode`",
-            ));
-        }
-        let bc = file("Barcodes.dat");
-        barcode_to_subject.insert(
-            id_field(&bc, line, "barcode", v[1])?,
-            id_field(&bc, line, "subject", v[0])?,
-        );
-    }
+    let truth = read_mrclam_truth(&file("Landmark_Groundtruth.dat"))?;
+    let barcode_to_subject = read_mrclam_barcodes(&file("Barcodes.dat"))?;
     let mut rows = Vec::new();
     let mut skipped = 0;
     let mut found_any = false;

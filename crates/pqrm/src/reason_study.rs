@@ -549,95 +549,11 @@ pub fn run_reason_study(
             .into_iter()
             .filter(|s| truth.state(&calc, s).ok().flatten().is_some())
             .collect();
-        let mut accs = new_accs();
-        let mut picture = None;
-        for repeat in 0..config.repeats {
-            let mut rng = ChaCha8Rng::seed_from_u64(
-                config.seed ^ (repeat as u64).wrapping_mul(0x9e37_79b9_7f4a_7c15),
-            );
-            let hidden: Vec<LandmarkSet> = sets
-                .iter()
-                .copied()
-                .filter(|_| rng.random::<f64>() < config.hide_fraction)
-                .collect();
-            let mut visible = full.clone();
-            let hidden_set: std::collections::BTreeSet<[u32; 3]> =
-                hidden.iter().map(LandmarkSet::ids).collect();
-            visible.retain(|s| {
-                let mut ids = s.ids();
-                ids.sort_unstable();
-                !hidden_set.contains(&ids)
-            });
-            let targets: Vec<LandmarkSet> = hidden.iter().flat_map(|s| orderings(*s)).collect();
-            score_hidden(&visible, &full, truth, &targets, config.epsilon, &mut accs)?;
-            if repeat == 0 {
-                picture = reference_pair_picture(&visible, truth, &hidden, config.epsilon)?;
-            }
-            progress.tick();
-        }
-        let hidden = predictors(&accs.0, &accs.1, &accs.2, Some(&accs.3));
-        // (c)
-        let checked = check(&full)?;
-        let wrong_sets: std::collections::BTreeSet<[u32; 3]> = sets
-            .iter()
-            .filter(|s| {
-                let p = full.belief(**s).unwrap_or_default();
-                let ml = (0..p.len()).fold(0, |b, i| if p[i] > p[b] { i } else { b });
-                truth.state(&calc, s).ok().flatten() != Some(StateId(ml as u16))
-            })
-            .map(LandmarkSet::ids)
-            .collect();
-        let flagged_wrong = checked
-            .flagged
-            .iter()
-            .filter(|f| wrong_sets.contains(&f.set))
-            .count();
-        let check_score = CheckScore {
-            sets: sets.len(),
-            wrong: wrong_sets.len(),
-            consistent: checked.consistent,
-            flagged: checked.flagged.len(),
-            flagged_wrong,
-            precision: (!checked.flagged.is_empty())
-                .then(|| flagged_wrong as f64 / checked.flagged.len() as f64),
-            recall: (!wrong_sets.is_empty())
-                .then(|| flagged_wrong as f64 / wrong_sets.len() as f64),
-            base_rate: wrong_sets.len() as f64 / sets.len().max(1) as f64,
-        };
+        let (hidden, picture) = hide_and_infer(&full, &sets, truth, config, progress)?;
+        let check_score = check_score(&calc, &full, &sets, truth)?;
         progress.tick();
-        // (b)
-        let mut accs_b = new_accs();
-        let mut reached_b = new_accs();
-        let mut unseen_sets = 0;
-        let mut unseen_rounds = vec![0; config.rounds + 1];
-        for w in 0..config.worlds_b {
-            let world = MonteCarloConfig {
-                seed: config.seed ^ 0x5eed_0b0b,
-                ..config.world.clone()
-            };
-            let (wtruth, scans) = simulate_trial(&world, config.sigma_b, 0, w);
-            let map = build_map(
-                &calc,
-                &scans,
-                PqrmConfig {
-                    seed: config.map.seed ^ w as u64,
-                    ..config.map
-                },
-            )?;
-            let per_round = score_unseen(
-                &map,
-                &wtruth,
-                config.epsilon,
-                config.rounds,
-                &mut accs_b,
-                &mut reached_b,
-            )?;
-            unseen_sets += per_round.iter().sum::<usize>();
-            for (total, n) in unseen_rounds.iter_mut().zip(per_round) {
-                *total += n;
-            }
-            progress.tick();
-        }
+        let (unseen, unseen_reached, unseen_sets, unseen_rounds) =
+            infer_unseen_in_simulation(&calc, config, progress)?;
         let generic =
             qsr_core::reason::Algebra::of(&calc, qsr_core::reason::TableScope::GeneralPosition)?;
         let informative_compose = calc.states().any(|r| {
@@ -649,8 +565,8 @@ pub fn run_reason_study(
             states: calc.n_states(),
             informative_compose,
             hidden,
-            unseen: predictors(&accs_b.0, &accs_b.1, &accs_b.2, None),
-            unseen_reached: predictors(&reached_b.0, &reached_b.1, &reached_b.2, None),
+            unseen,
+            unseen_reached,
             unseen_sets,
             unseen_rounds,
             check: check_score,
@@ -658,6 +574,130 @@ pub fn run_reason_study(
         });
     }
     Ok(out)
+}
+
+/// (a) Hiding: in each repeat a share of the observed sets is hidden and inferred from the
+/// rest, scored against the truth; the first repeat's reference pair is pictured.
+fn hide_and_infer(
+    full: &Pqrm,
+    sets: &[LandmarkSet],
+    truth: &GroundTruth,
+    config: &ReasonStudyConfig,
+    progress: &dyn Progress,
+) -> Result<(Predictors, Option<ReferencePairPicture>)> {
+    let mut accs = new_accs();
+    let mut picture = None;
+    for repeat in 0..config.repeats {
+        let mut rng = ChaCha8Rng::seed_from_u64(
+            config.seed ^ (repeat as u64).wrapping_mul(0x9e37_79b9_7f4a_7c15),
+        );
+        let hidden: Vec<LandmarkSet> = sets
+            .iter()
+            .copied()
+            .filter(|_| rng.random::<f64>() < config.hide_fraction)
+            .collect();
+        let mut visible = full.clone();
+        let hidden_set: std::collections::BTreeSet<[u32; 3]> =
+            hidden.iter().map(LandmarkSet::ids).collect();
+        visible.retain(|s| {
+            let mut ids = s.ids();
+            ids.sort_unstable();
+            !hidden_set.contains(&ids)
+        });
+        let targets: Vec<LandmarkSet> = hidden.iter().flat_map(|s| orderings(*s)).collect();
+        score_hidden(&visible, full, truth, &targets, config.epsilon, &mut accs)?;
+        if repeat == 0 {
+            picture = reference_pair_picture(&visible, truth, &hidden, config.epsilon)?;
+        }
+        progress.tick();
+    }
+    Ok((
+        predictors(&accs.0, &accs.1, &accs.2, Some(&accs.3)),
+        picture,
+    ))
+}
+
+/// (c) The consistency check of the full map, scored: how many of the entries it flags are
+/// wrong (precision) and how many wrong entries it flags (recall).
+fn check_score(
+    calc: &Calculus,
+    full: &Pqrm,
+    sets: &[LandmarkSet],
+    truth: &GroundTruth,
+) -> Result<CheckScore> {
+    let checked = check(full)?;
+    let wrong_sets: std::collections::BTreeSet<[u32; 3]> = sets
+        .iter()
+        .filter(|s| {
+            let p = full.belief(**s).unwrap_or_default();
+            let ml = (0..p.len()).fold(0, |b, i| if p[i] > p[b] { i } else { b });
+            truth.state(calc, s).ok().flatten() != Some(StateId(ml as u16))
+        })
+        .map(LandmarkSet::ids)
+        .collect();
+    let flagged_wrong = checked
+        .flagged
+        .iter()
+        .filter(|f| wrong_sets.contains(&f.set))
+        .count();
+    Ok(CheckScore {
+        sets: sets.len(),
+        wrong: wrong_sets.len(),
+        consistent: checked.consistent,
+        flagged: checked.flagged.len(),
+        flagged_wrong,
+        precision: (!checked.flagged.is_empty())
+            .then(|| flagged_wrong as f64 / checked.flagged.len() as f64),
+        recall: (!wrong_sets.is_empty()).then(|| flagged_wrong as f64 / wrong_sets.len() as f64),
+        base_rate: wrong_sets.len() as f64 / sets.len().max(1) as f64,
+    })
+}
+
+/// (b) Sets never observed, inferred in simulated worlds: the predictors over every unseen
+/// set and over those a round reached, the unseen sets and how many each round reached.
+fn infer_unseen_in_simulation(
+    calc: &Calculus,
+    config: &ReasonStudyConfig,
+    progress: &dyn Progress,
+) -> Result<(Predictors, Predictors, usize, Vec<usize>)> {
+    let mut accs_b = new_accs();
+    let mut reached_b = new_accs();
+    let mut unseen_sets = 0;
+    let mut unseen_rounds = vec![0; config.rounds + 1];
+    for w in 0..config.worlds_b {
+        let world = MonteCarloConfig {
+            seed: config.seed ^ 0x5eed_0b0b,
+            ..config.world.clone()
+        };
+        let (wtruth, scans) = simulate_trial(&world, config.sigma_b, 0, w);
+        let map = build_map(
+            calc,
+            &scans,
+            PqrmConfig {
+                seed: config.map.seed ^ w as u64,
+                ..config.map
+            },
+        )?;
+        let per_round = score_unseen(
+            &map,
+            &wtruth,
+            config.epsilon,
+            config.rounds,
+            &mut accs_b,
+            &mut reached_b,
+        )?;
+        unseen_sets += per_round.iter().sum::<usize>();
+        for (total, n) in unseen_rounds.iter_mut().zip(per_round) {
+            *total += n;
+        }
+        progress.tick();
+    }
+    Ok((
+        predictors(&accs_b.0, &accs_b.1, &accs_b.2, None),
+        predictors(&reached_b.0, &reached_b.1, &reached_b.2, None),
+        unseen_sets,
+        unseen_rounds,
+    ))
 }
 
 /// The ordered pair with the most hidden sets, every other landmark placed in its frame.

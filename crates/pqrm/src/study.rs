@@ -450,18 +450,13 @@ pub fn run_monte_carlo_shard(
         .collect()
 }
 
-/// Combines trial records (from one run or many shards, in any order) into the study result.
-///
-/// # Errors
-/// [`PqrmError::Mismatch`] when a record does not belong to the configuration or a trial is
-/// missing or duplicated.
-pub fn aggregate_monte_carlo(
+/// The records sorted by (level, trial), checked to be exactly one per trial of `config`,
+/// each made with its `n_calc` calculi.
+fn sorted_records<'r>(
     config: &MonteCarloConfig,
-    records: &[TrialRecord],
-) -> Result<MonteCarloResult> {
-    config.validate()?;
-    let config = &completed(config);
-    let family = CalculusFamily::new(&config.calculi)?;
+    records: &'r [TrialRecord],
+    n_calc: usize,
+) -> Result<Vec<&'r TrialRecord>> {
     let mut records: Vec<&TrialRecord> = records.iter().collect();
     records.sort_by_key(|r| (r.level, r.trial));
     let expected = config.sigmas.len() * config.trials;
@@ -479,7 +474,6 @@ pub fn aggregate_monte_carlo(
             config.trials
         )));
     }
-    let n_calc = family.calculi.len();
     if records
         .iter()
         .any(|r| r.metrics.as_ref().is_some_and(|m| m.len() != n_calc))
@@ -488,6 +482,22 @@ pub fn aggregate_monte_carlo(
             "trial records were made with other calculi".into(),
         ));
     }
+    Ok(records)
+}
+
+/// Combines trial records (from one run or many shards, in any order) into the study result.
+///
+/// # Errors
+/// [`PqrmError::Mismatch`] when a record does not belong to the configuration or a trial is
+/// missing or duplicated.
+pub fn aggregate_monte_carlo(
+    config: &MonteCarloConfig,
+    records: &[TrialRecord],
+) -> Result<MonteCarloResult> {
+    config.validate()?;
+    let config = &completed(config);
+    let family = CalculusFamily::new(&config.calculi)?;
+    let records = sorted_records(config, records, family.calculi.len())?;
     let q0 = family.calculi[0].n_states();
     let mut levels = Vec::new();
     let mut confusion = Vec::new();
@@ -661,10 +671,13 @@ pub fn run_real_tempered(
     // Per calculus and triplet: how many frames voted for each state, and the summed
     // single-frame probability (the tie-breaker).
     let mut votes: Vec<BTreeMap<LandmarkSet, Votes>> = vec![BTreeMap::new(); n];
-    let mut frame_acc: Vec<(usize, usize, u64, f64, Vec<usize>)> = family
+    let mut frames: Vec<FrameTally> = family
         .calculi
         .iter()
-        .map(|c| (0, 0, 0, 0.0, vec![0; c.n_states()]))
+        .map(|c| FrameTally {
+            ranks: vec![0; c.n_states()],
+            ..FrameTally::default()
+        })
         .collect();
     for (step, scan) in dataset.scans.iter().enumerate() {
         progress.tick();
@@ -682,7 +695,6 @@ pub fn run_real_tempered(
         for i in 0..n {
             let counts = family.counts_for(i, &fine);
             let calc = &family.calculi[i];
-            let acc = &mut frame_acc[i];
             for (set, c) in &counts {
                 let Some(t) = truth.state(calc, &set)? else {
                     continue;
@@ -691,72 +703,109 @@ pub fn run_real_tempered(
                     log_p: normalise(log_likelihood(c, config.floor)),
                     updates: 1,
                 };
-                let ml = b.ml_state();
                 let v = votes[i]
                     .entry(set)
                     .or_insert_with(|| (vec![0; calc.n_states()], vec![0.0; calc.n_states()]));
-                v.0[ml.index()] += 1;
+                v.0[b.ml_state().index()] += 1;
                 for (m, p) in v.1.iter_mut().zip(b.probabilities()) {
                     *m += p;
                 }
-                acc.0 += 1;
-                acc.1 += usize::from(ml != t);
-                acc.2 += u64::from(calc.neighbours().distance(ml, t).unwrap_or(0));
-                acc.3 += b.entropy();
-                let rank = b.ranked().iter().position(|s| *s == t).unwrap_or(0);
-                acc.4[rank] += 1;
+                frames[i].add(calc, &b, t);
             }
             maps[i].apply_counts(&counts)?;
         }
     }
-    let mut out = Vec::new();
-    for (i, map) in maps.iter().enumerate() {
-        let (cnt, wrong, dist, ent, ranks) = &frame_acc[i];
-        let nf = (*cnt).max(1) as f64;
+    maps.iter()
+        .zip(&votes)
+        .zip(&frames)
+        .map(|((map, votes), frames)| real_result(map, truth, votes, frames))
+        .collect()
+}
+
+/// The per-frame baseline of one calculus: each frame's single-observation belief scored
+/// against the truth.
+#[derive(Debug, Clone, Default)]
+struct FrameTally {
+    /// Scored (frame, triplet) pairs.
+    n: usize,
+    /// Of them, with the wrong ML state.
+    wrong: usize,
+    /// Summed neighbour distance of the ML state to the true one.
+    dist: u64,
+    /// Summed entropy.
+    entropy: f64,
+    /// How often the true state had each rank.
+    ranks: Vec<usize>,
+}
+
+impl FrameTally {
+    fn add(&mut self, calc: &Calculus, b: &TripletBelief, truth: qsr_core::StateId) {
+        let ml = b.ml_state();
+        self.n += 1;
+        self.wrong += usize::from(ml != truth);
+        self.dist += u64::from(calc.neighbours().distance(ml, truth).unwrap_or(0));
+        self.entropy += b.entropy();
+        let rank = b.ranked().iter().position(|s| *s == truth).unwrap_or(0);
+        self.ranks[rank] += 1;
+    }
+
+    fn metrics(&self) -> FrameMetrics {
+        let nf = self.n.max(1) as f64;
         let mut covered = 0;
-        let top_n_error = ranks
+        let top_n_error = self
+            .ranks
             .iter()
             .map(|r| {
                 covered += r;
                 1.0 - covered as f64 / nf
             })
             .collect();
-        let calc = map.calculus();
-        let (mut vn, mut vwrong, mut vdist) = (0usize, 0usize, 0u64);
-        for (set, (count, mass)) in &votes[i] {
-            let Some(t) = truth.state(calc, set)? else {
-                continue;
-            };
-            let best = (0..count.len())
-                .max_by(|&a, &b| count[a].cmp(&count[b]).then(mass[a].total_cmp(&mass[b])))
-                .unwrap_or(0);
-            let s = qsr_core::StateId(u16::try_from(best).unwrap_or(u16::MAX));
-            vn += 1;
-            vwrong += usize::from(s != t);
-            vdist += u64::from(calc.neighbours().distance(s, t).unwrap_or(0));
+        FrameMetrics {
+            n: self.n,
+            error_rate: self.wrong as f64 / nf,
+            mean_neighbor_distance: self.dist as f64 / nf,
+            mean_entropy: self.entropy / nf,
+            top_n_error,
         }
-        let vnf = vn.max(1) as f64;
-        out.push(RealCalculusResult {
-            calculus: map.calculus().name().to_owned(),
-            majority: VoteMetrics {
-                n: vn,
-                error_rate: vwrong as f64 / vnf,
-                mean_neighbor_distance: vdist as f64 / vnf,
-            },
-            calibration: crate::calibration::calibration(map, truth)?,
-            pqrm: evaluate(map, truth)?,
-            entropies: map.iter().map(|(_, b)| b.entropy()).collect(),
-            per_frame: FrameMetrics {
-                n: *cnt,
-                error_rate: *wrong as f64 / nf,
-                mean_neighbor_distance: *dist as f64 / nf,
-                mean_entropy: ent / nf,
-                top_n_error,
-            },
-            random: random_baselines(map.calculus()),
-        });
     }
-    Ok(out)
+}
+
+/// One calculus's result: the map scored, the majority vote over frames, the per-frame
+/// baseline, calibration and random baselines.
+fn real_result(
+    map: &Pqrm,
+    truth: &crate::metrics::GroundTruth,
+    votes: &BTreeMap<LandmarkSet, Votes>,
+    frames: &FrameTally,
+) -> Result<RealCalculusResult> {
+    let calc = map.calculus();
+    let (mut vn, mut vwrong, mut vdist) = (0usize, 0usize, 0u64);
+    for (set, (count, mass)) in votes {
+        let Some(t) = truth.state(calc, set)? else {
+            continue;
+        };
+        let best = (0..count.len())
+            .max_by(|&a, &b| count[a].cmp(&count[b]).then(mass[a].total_cmp(&mass[b])))
+            .unwrap_or(0);
+        let s = qsr_core::StateId(u16::try_from(best).unwrap_or(u16::MAX));
+        vn += 1;
+        vwrong += usize::from(s != t);
+        vdist += u64::from(calc.neighbours().distance(s, t).unwrap_or(0));
+    }
+    let vnf = vn.max(1) as f64;
+    Ok(RealCalculusResult {
+        calculus: calc.name().to_owned(),
+        majority: VoteMetrics {
+            n: vn,
+            error_rate: vwrong as f64 / vnf,
+            mean_neighbor_distance: vdist as f64 / vnf,
+        },
+        calibration: crate::calibration::calibration(map, truth)?,
+        pqrm: evaluate(map, truth)?,
+        entropies: map.iter().map(|(_, b)| b.entropy()).collect(),
+        per_frame: frames.metrics(),
+        random: random_baselines(calc),
+    })
 }
 
 /// How well a dataset's covariances describe its errors, from the pairs of landmarks seen in

@@ -30,29 +30,17 @@ pub struct RegionPicture<'a> {
     pub numbers: bool,
 }
 
-pub(crate) fn draw_regions<DB: DrawingBackend>(
-    root: &DrawingArea<DB, Shift>,
-    title: &str,
-    p: &RegionPicture<'_>,
-) -> Drawn
-where
-    DB::ErrorType: 'static,
-{
-    root.fill(&WHITE)?;
+/// The picture's cell size.
+fn cell_size(p: &RegionPicture<'_>) -> (f64, f64) {
     let [x0, x1, y0, y1] = p.window;
-    let mut chart = ChartBuilder::on(root)
-        .margin(12)
-        .caption(title, ("sans-serif", 18))
-        .x_label_area_size(36)
-        .y_label_area_size(48)
-        .build_cartesian_2d(x0..x1, y0..y1)?;
-    chart
-        .configure_mesh()
-        .disable_mesh()
-        .label_style(("sans-serif", 12))
-        .draw()?;
-    let (dx, dy) = ((x1 - x0) / p.nx as f64, (y1 - y0) / p.ny as f64);
-    // one rectangle per run of equal cells in a row keeps the SVG small
+    ((x1 - x0) / p.nx as f64, (y1 - y0) / p.ny as f64)
+}
+
+/// The regions' cells as rectangles, one per run of equal cells in a row (keeps the SVG
+/// small), shaded cells darker.
+fn region_rects(p: &RegionPicture<'_>) -> Vec<Rectangle<(f64, f64)>> {
+    let [x0, _, y0, _] = p.window;
+    let (dx, dy) = cell_size(p);
     let mut rects = Vec::new();
     for j in 0..p.ny {
         let mut i = 0;
@@ -85,8 +73,13 @@ where
             i = e;
         }
     }
-    chart.draw_series(rects)?;
-    // region borders
+    rects
+}
+
+/// The borders between cells of different regions.
+fn region_borders(p: &RegionPicture<'_>) -> Vec<PathElement<(f64, f64)>> {
+    let [x0, _, y0, _] = p.window;
+    let (dx, dy) = cell_size(p);
     let mut lines = Vec::new();
     for j in 0..p.ny {
         for i in 0..p.nx {
@@ -107,7 +100,59 @@ where
             }
         }
     }
-    chart.draw_series(lines)?;
+    lines
+}
+
+/// Each region's index and the centroid of its cells.
+fn region_centroids(p: &RegionPicture<'_>) -> Vec<(usize, (f64, f64))> {
+    let [x0, _, y0, _] = p.window;
+    let (dx, dy) = cell_size(p);
+    let n = p
+        .cell_region
+        .iter()
+        .filter(|&&r| r != u32::MAX)
+        .max()
+        .map_or(0, |&r| r as usize + 1);
+    let mut acc = vec![(0.0, 0.0, 0usize); n];
+    for (c, &r) in p.cell_region.iter().enumerate() {
+        if r != u32::MAX {
+            let a = &mut acc[r as usize];
+            a.0 += x0 + ((c % p.nx) as f64 + 0.5) * dx;
+            a.1 += y0 + ((c / p.nx) as f64 + 0.5) * dy;
+            a.2 += 1;
+        }
+    }
+    acc.iter()
+        .enumerate()
+        .filter(|(_, a)| a.2 > 0)
+        .map(|(r, a)| (r, (a.0 / a.2 as f64, a.1 / a.2 as f64)))
+        .collect()
+}
+
+pub(crate) fn draw_regions<DB: DrawingBackend>(
+    root: &DrawingArea<DB, Shift>,
+    title: &str,
+    p: &RegionPicture<'_>,
+) -> Drawn
+where
+    DB::ErrorType: 'static,
+{
+    root.fill(&WHITE)?;
+    let [x0, x1, y0, y1] = p.window;
+    let mut chart = ChartBuilder::on(root)
+        .margin(12)
+        .caption(title, ("sans-serif", 18))
+        .x_label_area_size(36)
+        .y_label_area_size(48)
+        .build_cartesian_2d(x0..x1, y0..y1)?;
+    chart
+        .configure_mesh()
+        .disable_mesh()
+        .label_style(("sans-serif", 12))
+        .draw()?;
+    let (dx, dy) = ((x1 - x0) / p.nx as f64, (y1 - y0) / p.ny as f64);
+    chart.draw_series(region_rects(p))?;
+    chart.draw_series(region_borders(p))?;
     let inside = |q: &[f64; 2]| q[0] >= x0 && q[0] <= x1 && q[1] >= y0 && q[1] <= y1;
     chart.draw_series(
         p.points
@@ -130,33 +175,13 @@ where
         )))?;
     }
     if p.numbers {
-        let n = p
-            .cell_region
-            .iter()
-            .filter(|&&r| r != u32::MAX)
-            .max()
-            .map_or(0, |&r| r as usize + 1);
-        let mut acc = vec![(0.0, 0.0, 0usize); n];
-        for (c, &r) in p.cell_region.iter().enumerate() {
-            if r != u32::MAX {
-                let a = &mut acc[r as usize];
-                a.0 += x0 + ((c % p.nx) as f64 + 0.5) * dx;
-                a.1 += y0 + ((c / p.nx) as f64 + 0.5) * dy;
-                a.2 += 1;
-            }
-        }
-        chart.draw_series(
-            acc.iter()
-                .enumerate()
-                .filter(|(_, a)| a.2 > 0)
-                .map(|(r, a)| {
-                    Text::new(
-                        (r + 1).to_string(),
-                        (a.0 / a.2 as f64, a.1 / a.2 as f64),
-                        ("sans-serif", 13).into_font().color(&BLACK),
-                    )
-                }),
-        )?;
+        chart.draw_series(region_centroids(p).into_iter().map(|(r, at)| {
+            Text::new(
+                (r + 1).to_string(),
+                at,
+                ("sans-serif", 13).into_font().color(&BLACK),
+            )
+        }))?;
     }
     Ok(())
 }

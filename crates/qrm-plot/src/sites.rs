@@ -212,58 +212,14 @@ pub struct DemoPicture<'a> {
     pub regions: Option<(String, RegionPicture<'a>)>,
 }
 
-fn draw_demo<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, p: &DemoPicture<'_>) -> Drawn
+/// The run over the site: the plan's map elements, the searches, the trajectory, the links
+/// found, the start and the goal.
+fn draw_run<DB: DrawingBackend>(chart: &mut MetreChart<'_, DB>, p: &DemoPicture<'_>) -> Drawn
 where
     DB::ErrorType: 'static,
 {
-    use okabe_ito::{BLUE, BLUISH_GREEN, ORANGE, REDDISH_PURPLE, SKY_BLUE, VERMILLION};
-    root.fill(&WHITE)?;
-    let (w_px, _) = root.dim_in_pixel();
-    let (left, right) = if p.regions.is_some() {
-        root.split_horizontally(w_px * 64 / 100)
-    } else {
-        root.split_horizontally(w_px)
-    };
-    let w = p.world;
-    let (mut chart, px_per_m) = world_axes(&left, &p.title, w)?;
-    let disc = |r: f64| ((r * px_per_m).round() as i32).max(2);
+    use okabe_ito::{BLUE, BLUISH_GREEN, ORANGE, REDDISH_PURPLE, VERMILLION};
     let pt = |q: &[f64; 2]| (q[0], q[1]);
-    chart.draw_series(
-        w.clutter
-            .iter()
-            .map(|c| Circle::new(pt(&c.pos), disc(c.radius), RGBColor(205, 190, 165).filled())),
-    )?;
-    chart
-        .draw_series(w.walls.iter().map(|l| {
-            PathElement::new(
-                vec![pt(&l.start), pt(&l.end)],
-                RGBColor(80, 80, 80).stroke_width(4),
-            )
-        }))?
-        .label("walls")
-        .legend(|(x, y)| {
-            PathElement::new(
-                vec![(x, y), (x + 16, y)],
-                RGBColor(80, 80, 80).stroke_width(4),
-            )
-        });
-    chart
-        .draw_series(w.landmarks.iter().map(|l| {
-            Circle::new(
-                pt(&l.pos),
-                disc(l.radius).max(3),
-                RGBColor(120, 120, 120).filled(),
-            )
-        }))?
-        .label("landmarks")
-        .legend(|(x, y)| Circle::new((x + 8, y), 3, RGBColor(120, 120, 120).filled()));
-    chart
-        .draw_series(std::iter::once(PathElement::new(
-            p.drive.iter().map(pt).collect::<Vec<_>>(),
-            SKY_BLUE.stroke_width(1),
-        )))?
-        .label("mapping drive")
-        .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 16, y)], SKY_BLUE.stroke_width(1)));
     chart
         .draw_series(p.plan.iter().map(|t| {
             Polygon::new(
@@ -323,6 +279,62 @@ where
         )))?
         .label("goal landmark")
         .legend(|(x, y)| Circle::new((x + 8, y), 6, REDDISH_PURPLE.filled()));
+    Ok(())
+}
+
+fn draw_demo<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, p: &DemoPicture<'_>) -> Drawn
+where
+    DB::ErrorType: 'static,
+{
+    use okabe_ito::SKY_BLUE;
+    root.fill(&WHITE)?;
+    let (w_px, _) = root.dim_in_pixel();
+    let (left, right) = if p.regions.is_some() {
+        root.split_horizontally(w_px * 64 / 100)
+    } else {
+        root.split_horizontally(w_px)
+    };
+    let w = p.world;
+    let (mut chart, px_per_m) = world_axes(&left, &p.title, w)?;
+    let disc = |r: f64| ((r * px_per_m).round() as i32).max(2);
+    let pt = |q: &[f64; 2]| (q[0], q[1]);
+    chart.draw_series(
+        w.clutter
+            .iter()
+            .map(|c| Circle::new(pt(&c.pos), disc(c.radius), RGBColor(205, 190, 165).filled())),
+    )?;
+    chart
+        .draw_series(w.walls.iter().map(|l| {
+            PathElement::new(
+                vec![pt(&l.start), pt(&l.end)],
+                RGBColor(80, 80, 80).stroke_width(4),
+            )
+        }))?
+        .label("walls")
+        .legend(|(x, y)| {
+            PathElement::new(
+                vec![(x, y), (x + 16, y)],
+                RGBColor(80, 80, 80).stroke_width(4),
+            )
+        });
+    chart
+        .draw_series(w.landmarks.iter().map(|l| {
+            Circle::new(
+                pt(&l.pos),
+                disc(l.radius).max(3),
+                RGBColor(120, 120, 120).filled(),
+            )
+        }))?
+        .label("landmarks")
+        .legend(|(x, y)| Circle::new((x + 8, y), 3, RGBColor(120, 120, 120).filled()));
+    chart
+        .draw_series(std::iter::once(PathElement::new(
+            p.drive.iter().map(pt).collect::<Vec<_>>(),
+            SKY_BLUE.stroke_width(1),
+        )))?
+        .label("mapping drive")
+        .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 16, y)], SKY_BLUE.stroke_width(1)));
+    draw_run(&mut chart, p)?;
     chart
         .configure_series_labels()
         .position(SeriesLabelPosition::LowerLeft)

@@ -156,25 +156,7 @@ fn draw(
         .caption(title, ("sans-serif", 18))
         .build_cartesian_2d(x0..x1, y0..y1)?;
 
-    // Fill: one rectangle per run of equal labels in a row.
-    let mut rects = Vec::new();
-    for iy in 0..ny {
-        let mut start = 0;
-        for ix in 1..=nx {
-            if ix == nx || grid[iy * nx + ix] != grid[iy * nx + start] {
-                let s = grid[iy * nx + start];
-                let ya = y0 + iy as f64 * cell;
-                rects.push((
-                    x0 + start as f64 * cell,
-                    ya,
-                    x0 + ix as f64 * cell,
-                    (ya + cell).min(y1),
-                    usize::from(s),
-                ));
-                start = ix;
-            }
-        }
-    }
+    let rects = label_runs(grid, nx, ny, [x0, x1, y0, y1], cell);
     chart.draw_series(
         rects
             .into_iter()
@@ -182,25 +164,8 @@ fn draw(
     )?;
 
     // Constraint curves, clipped to the window.
-    if let Partition::Constraints(c) = calculus.partition() {
-        for shape in c.shapes() {
-            let pts: Vec<(f64, f64)> = match *shape {
-                Shape::Line { a, b, c } => clip_line(a, b, c, [x0, x1, y0, y1]),
-                Shape::Circle { center, radius } => (0..=360)
-                    .map(|k| {
-                        let t = f64::from(k).to_radians();
-                        (center[0] + radius * t.cos(), center[1] + radius * t.sin())
-                    })
-                    .collect(),
-            };
-            let inside = |p: &(f64, f64)| p.0 >= x0 && p.0 <= x1 && p.1 >= y0 && p.1 <= y1;
-            for run in pts.split(|p| !inside(p)) {
-                if run.len() >= 2 {
-                    chart
-                        .draw_series(LineSeries::new(run.iter().copied(), BLACK.stroke_width(1)))?;
-                }
-            }
-        }
+    for run in curve_runs(calculus, [x0, x1, y0, y1]) {
+        chart.draw_series(LineSeries::new(run, BLACK.stroke_width(1)))?;
     }
 
     // Reference entities.
@@ -235,16 +200,7 @@ fn draw(
         }
     }
 
-    // Labels at each state's most interior cell (largest chamfer distance to another
-    // state or the window edge).
-    let dist = chamfer(grid, nx, ny);
-    let mut best: Vec<Option<(u32, usize)>> = vec![None; calculus.n_states()];
-    for (i, (&s, &d)) in grid.iter().zip(&dist).enumerate() {
-        let slot = &mut best[usize::from(s)];
-        if slot.is_none_or(|(bd, _)| d > bd) {
-            *slot = Some((d, i));
-        }
-    }
+    let best = label_cells(grid, nx, ny, calculus.n_states());
     let style =
         TextStyle::from(("sans-serif", 13).into_font()).pos(Pos::new(HPos::Center, VPos::Center));
     for (s, b) in best.iter().enumerate() {
@@ -259,6 +215,76 @@ fn draw(
         }
     }
     Ok(())
+}
+
+/// The constraint curves of a constraint calculus as the runs of points inside `window`
+/// (two or more points each).
+fn curve_runs(calculus: &Calculus, [x0, x1, y0, y1]: [f64; 4]) -> Vec<Vec<(f64, f64)>> {
+    let Partition::Constraints(c) = calculus.partition() else {
+        return Vec::new();
+    };
+    let inside = |p: &(f64, f64)| p.0 >= x0 && p.0 <= x1 && p.1 >= y0 && p.1 <= y1;
+    let mut runs = Vec::new();
+    for shape in c.shapes() {
+        let pts: Vec<(f64, f64)> = match *shape {
+            Shape::Line { a, b, c } => clip_line(a, b, c, [x0, x1, y0, y1]),
+            Shape::Circle { center, radius } => (0..=360)
+                .map(|k| {
+                    let t = f64::from(k).to_radians();
+                    (center[0] + radius * t.cos(), center[1] + radius * t.sin())
+                })
+                .collect(),
+        };
+        runs.extend(
+            pts.split(|p| !inside(p))
+                .filter(|run| run.len() >= 2)
+                .map(<[(f64, f64)]>::to_vec),
+        );
+    }
+    runs
+}
+
+/// One rectangle `(x0, y0, x1, y1, state)` per run of equal labels in a row of the raster.
+fn label_runs(
+    grid: &[u16],
+    nx: usize,
+    ny: usize,
+    [x0, _, y0, y1]: [f64; 4],
+    cell: f64,
+) -> Vec<(f64, f64, f64, f64, usize)> {
+    let mut rects = Vec::new();
+    for iy in 0..ny {
+        let mut start = 0;
+        for ix in 1..=nx {
+            if ix == nx || grid[iy * nx + ix] != grid[iy * nx + start] {
+                let s = grid[iy * nx + start];
+                let ya = y0 + iy as f64 * cell;
+                rects.push((
+                    x0 + start as f64 * cell,
+                    ya,
+                    x0 + ix as f64 * cell,
+                    (ya + cell).min(y1),
+                    usize::from(s),
+                ));
+                start = ix;
+            }
+        }
+    }
+    rects
+}
+
+/// Where each state's label goes: its most interior cell (largest chamfer distance to
+/// another state or the window edge), as (distance, cell index).
+fn label_cells(grid: &[u16], nx: usize, ny: usize, n_states: usize) -> Vec<Option<(u32, usize)>> {
+    let dist = chamfer(grid, nx, ny);
+    let mut best: Vec<Option<(u32, usize)>> = vec![None; n_states];
+    for (i, (&s, &d)) in grid.iter().zip(&dist).enumerate() {
+        let slot = &mut best[usize::from(s)];
+        if slot.is_none_or(|(bd, _)| d > bd) {
+            *slot = Some((d, i));
+        }
+    }
+    best
 }
 
 /// Two-pass 3-4 chamfer distance to the nearest cell of another label or the window edge.

@@ -137,7 +137,25 @@ fn circle_fit(pts: &[[f64; 2]]) -> Option<([f64; 2], f64)> {
 /// Extracts landmark candidates from one scan.
 #[must_use]
 pub fn extract(scan: &LaserScan, cfg: &ExtractorConfig) -> Vec<Candidate> {
-    // Pass 1: split on jumps and missing returns.
+    clusters(scan, cfg)
+        .into_iter()
+        .filter_map(|c| candidate(scan, cfg, &c))
+        .collect()
+}
+
+/// A return's position in the scan's frame.
+fn return_xy(scan: &LaserScan, i: usize) -> [f64; 2] {
+    let (r, a) = (scan.ranges[i], scan.angles[i]);
+    [r * a.cos(), r * a.sin()]
+}
+
+fn dist(a: [f64; 2], b: [f64; 2]) -> f64 {
+    (a[0] - b[0]).hypot(a[1] - b[1])
+}
+
+/// The scan's returns in clusters: split on range jumps and missing returns (pass 1), then
+/// neighbours whose facing ends are close merged again (pass 2).
+fn clusters(scan: &LaserScan, cfg: &ExtractorConfig) -> Vec<Vec<usize>> {
     let mut clusters: Vec<Vec<usize>> = Vec::new();
     let mut current: Vec<usize> = Vec::new();
     for (i, r) in scan.ranges.iter().enumerate() {
@@ -158,87 +176,84 @@ pub fn extract(scan: &LaserScan, cfg: &ExtractorConfig) -> Vec<Candidate> {
     if !current.is_empty() {
         clusters.push(current);
     }
-    let xy = |i: usize| {
-        let (r, a) = (scan.ranges[i], scan.angles[i]);
-        [r * a.cos(), r * a.sin()]
-    };
-    let dist = |a: [f64; 2], b: [f64; 2]| (a[0] - b[0]).hypot(a[1] - b[1]);
-    // Pass 2: merge neighbours whose facing ends are close.
     let mut merged: Vec<Vec<usize>> = Vec::new();
     for c in clusters {
         if let Some(last) = merged.last_mut() {
             let (end, start) = (*last.last().unwrap_or(&0), c[0]);
-            if start - end <= 3 && dist(xy(end), xy(start)) < cfg.merge_distance {
+            if start - end <= 3
+                && dist(return_xy(scan, end), return_xy(scan, start)) < cfg.merge_distance
+            {
                 last.extend(c);
                 continue;
             }
         }
         merged.push(c);
     }
-    let mut out = Vec::new();
-    for c in merged {
-        let pts: Vec<[f64; 2]> = c.iter().map(|&i| xy(i)).collect();
-        let (a, b) = (pts[0], pts[pts.len() - 1]);
-        let chord = dist(a, b);
-        let off = |p: &[f64; 2]| {
-            if chord < 1e-9 {
-                dist(*p, a)
-            } else {
-                ((b[0] - a[0]) * (a[1] - p[1]) - (a[0] - p[0]) * (b[1] - a[1])).abs() / chord
-            }
-        };
-        let max_off = pts.iter().map(off).fold(0.0, f64::max);
-        let truth = majority(
-            &c.iter()
-                .map(|&i| scan.hits.get(i).copied().flatten())
-                .collect::<Vec<_>>(),
-        );
-        if chord >= cfg.wall_length && max_off <= cfg.wall_residual {
-            out.push(Candidate {
-                kind: CandidateKind::Wall,
-                centre: [(a[0] + b[0]) / 2.0, (a[1] + b[1]) / 2.0],
-                ends: Some([a, b]),
-                centroid: [(a[0] + b[0]) / 2.0, (a[1] + b[1]) / 2.0],
-                points: pts.len(),
-                truth,
-            });
-            continue;
+    merged
+}
+
+/// One cluster as a candidate: a wall (long and straight), a point landmark (an arc of the
+/// right size, or a corner), or nothing.
+fn candidate(scan: &LaserScan, cfg: &ExtractorConfig, c: &[usize]) -> Option<Candidate> {
+    let pts: Vec<[f64; 2]> = c.iter().map(|&i| return_xy(scan, i)).collect();
+    let (a, b) = (pts[0], pts[pts.len() - 1]);
+    let chord = dist(a, b);
+    let off = |p: &[f64; 2]| {
+        if chord < 1e-9 {
+            dist(*p, a)
+        } else {
+            ((b[0] - a[0]) * (a[1] - p[1]) - (a[0] - p[0]) * (b[1] - a[1])).abs() / chord
         }
-        let corner = max_off > cfg.corner_distance && chord < cfg.wall_length;
-        if !((cfg.min_points..=cfg.max_points).contains(&pts.len()) || corner) {
-            continue;
-        }
-        // A trunk's returns bulge (an arc) and fit within its diameter; a straight piece of wall
-        // seen at a grazing angle does neither.
-        let straight = max_off < 0.1 * chord;
-        if !corner && (chord > 2.0 * cfg.max_radius || straight) {
-            continue;
-        }
-        let n = pts.len() as f64;
-        let centroid = [
-            pts.iter().map(|p| p[0]).sum::<f64>() / n,
-            pts.iter().map(|p| p[1]).sum::<f64>() / n,
-        ];
-        let cr = centroid[0].hypot(centroid[1]).max(1e-9);
-        let fallback = [
-            centroid[0] * (1.0 + 0.5 * chord / cr),
-            centroid[1] * (1.0 + 0.5 * chord / cr),
-        ];
-        let centre = match circle_fit(&pts) {
-            // The centre must lie behind the returns (farther than their centroid).
-            Some((c, r)) if r <= cfg.max_radius && c[0].hypot(c[1]) > cr => c,
-            _ => fallback,
-        };
-        out.push(Candidate {
-            kind: CandidateKind::Point,
-            centre,
-            ends: None,
-            centroid,
+    };
+    let max_off = pts.iter().map(off).fold(0.0, f64::max);
+    let truth = majority(
+        &c.iter()
+            .map(|&i| scan.hits.get(i).copied().flatten())
+            .collect::<Vec<_>>(),
+    );
+    if chord >= cfg.wall_length && max_off <= cfg.wall_residual {
+        return Some(Candidate {
+            kind: CandidateKind::Wall,
+            centre: [(a[0] + b[0]) / 2.0, (a[1] + b[1]) / 2.0],
+            ends: Some([a, b]),
+            centroid: [(a[0] + b[0]) / 2.0, (a[1] + b[1]) / 2.0],
             points: pts.len(),
             truth,
         });
     }
-    out
+    let corner = max_off > cfg.corner_distance && chord < cfg.wall_length;
+    if !((cfg.min_points..=cfg.max_points).contains(&pts.len()) || corner) {
+        return None;
+    }
+    // A trunk's returns bulge (an arc) and fit within its diameter; a straight piece of wall
+    // seen at a grazing angle does neither.
+    let straight = max_off < 0.1 * chord;
+    if !corner && (chord > 2.0 * cfg.max_radius || straight) {
+        return None;
+    }
+    let n = pts.len() as f64;
+    let centroid = [
+        pts.iter().map(|p| p[0]).sum::<f64>() / n,
+        pts.iter().map(|p| p[1]).sum::<f64>() / n,
+    ];
+    let cr = centroid[0].hypot(centroid[1]).max(1e-9);
+    let fallback = [
+        centroid[0] * (1.0 + 0.5 * chord / cr),
+        centroid[1] * (1.0 + 0.5 * chord / cr),
+    ];
+    let centre = match circle_fit(&pts) {
+        // The centre must lie behind the returns (farther than their centroid).
+        Some((c, r)) if r <= cfg.max_radius && c[0].hypot(c[1]) > cr => c,
+        _ => fallback,
+    };
+    Some(Candidate {
+        kind: CandidateKind::Point,
+        centre,
+        ends: None,
+        centroid,
+        points: pts.len(),
+        truth,
+    })
 }
 
 /// Recognises point landmarks across frames by the triangles they form (see the module docs).

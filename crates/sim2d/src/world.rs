@@ -122,121 +122,9 @@ impl World {
     /// [`SimError::Invalid`] for non-finite numbers, non-positive radii, zero-length walls,
     /// empty bounds or duplicate landmark/wall ids.
     pub fn new(spec: WorldSpec) -> Result<Self> {
-        let [x0, x1, y0, y1] = spec.bounds;
-        check(
-            spec.bounds.iter().all(|b| b.is_finite()) && x1 > x0 && y1 > y0,
-            || format!("bounds {:?} must be finite with min < max", spec.bounds),
-        )?;
-        // rapier works in f32 and the pictures in pixels: a world of 1e30 m, or one narrower
-        // than a centimetre, has no meaningful simulation (and used to hang the plot).
-        let inside = |v: f64| v.abs() <= MAX_WORLD_EXTENT;
-        check(
-            spec.bounds.iter().all(|b| inside(*b))
-                && x1 - x0 >= MIN_WORLD_SIZE
-                && y1 - y0 >= MIN_WORLD_SIZE,
-            || {
-                format!(
-                    "bounds {:?} must lie within ±{MAX_WORLD_EXTENT:e} m and be at least \
-                     {MIN_WORLD_SIZE} m wide and high",
-                    spec.bounds
-                )
-            },
-        )?;
-        let sized = |pos: &[f64; 2], r: f64| {
-            pos.iter().all(|c| inside(*c))
-                && (MIN_WORLD_SIZE / 100.0..=MAX_WORLD_EXTENT).contains(&r)
-        };
-        for l in &spec.landmarks {
-            check(
-                sized(&l.pos, l.radius) || !l.radius.is_finite() || l.radius <= 0.0,
-                || {
-                    format!(
-                        "landmark {}: position {:?} and radius {} must lie within ±{MAX_WORLD_EXTENT:e} m \
-                     (radius at least {} m)",
-                        l.id,
-                        l.pos,
-                        l.radius,
-                        MIN_WORLD_SIZE / 100.0
-                    )
-                },
-            )?;
-        }
-        for w in &spec.walls {
-            check(
-                w.start
-                    .iter()
-                    .chain(&w.end)
-                    .all(|c| !c.is_finite() || inside(*c)),
-                || {
-                    format!(
-                        "wall {}: end points must lie within ±{MAX_WORLD_EXTENT:e} m",
-                        w.id
-                    )
-                },
-            )?;
-        }
-        let mut ids = std::collections::BTreeSet::new();
-        for l in &spec.landmarks {
-            check(
-                l.pos.iter().all(|c| c.is_finite()) && l.radius.is_finite(),
-                || format!("landmark {}: non-finite position or radius", l.id),
-            )?;
-            check(l.radius > 0.0, || {
-                format!("landmark {}: radius {} must be > 0", l.id, l.radius)
-            })?;
-            check(ids.insert(l.id), || {
-                format!("landmark id {} is used twice", l.id)
-            })?;
-        }
-        for w in &spec.walls {
-            check(w.start.iter().chain(&w.end).all(|c| c.is_finite()), || {
-                format!("wall {}: non-finite end point", w.id)
-            })?;
-            check(
-                (w.start[0] - w.end[0]).hypot(w.start[1] - w.end[1]) > 1e-6,
-                || format!("wall {} has zero length", w.id),
-            )?;
-            check(ids.insert(w.id), || {
-                format!("wall id {} is also used by another landmark or wall", w.id)
-            })?;
-        }
-        for (i, c) in spec.clutter.iter().enumerate() {
-            check(
-                c.pos.iter().all(|x| x.is_finite()) && c.radius.is_finite() && c.radius > 0.0,
-                || format!("clutter {i}: needs a finite position and a radius > 0"),
-            )?;
-        }
-        let mut colliders = ColliderSet::new();
-        let mut handles = Vec::new();
-        for (i, l) in spec.landmarks.iter().enumerate() {
-            handles.push(
-                colliders.insert(
-                    ColliderBuilder::ball(l.radius as f32)
-                        .translation(v(l.pos))
-                        .user_data(Hit::Landmark(i).encode())
-                        .build(),
-                ),
-            );
-        }
-        for (i, w) in spec.walls.iter().enumerate() {
-            handles.push(
-                colliders.insert(
-                    ColliderBuilder::segment(v(w.start), v(w.end))
-                        .user_data(Hit::Wall(i).encode())
-                        .build(),
-                ),
-            );
-        }
-        for (i, c) in spec.clutter.iter().enumerate() {
-            handles.push(
-                colliders.insert(
-                    ColliderBuilder::ball(c.radius as f32)
-                        .translation(v(c.pos))
-                        .user_data(Hit::Clutter(i).encode())
-                        .build(),
-                ),
-            );
-        }
+        check_extent(&spec)?;
+        check_entities(&spec)?;
+        let (colliders, handles) = colliders_of(&spec);
         let bodies = RigidBodySet::new();
         let mut broad_phase = BroadPhaseBvh::new();
         let mut events = Vec::new();
@@ -352,4 +240,135 @@ impl World {
             .any(|(_, c)| Hit::decode(c.user_data) != Hit::Landmark(index));
         !blocked
     }
+}
+
+/// Bounds, landmarks and walls within [`MAX_WORLD_EXTENT`], bounds at least
+/// [`MIN_WORLD_SIZE`] wide and high: rapier works in f32 and the pictures in pixels, so a
+/// world of 1e30 m, or one narrower than a centimetre, has no meaningful simulation (and
+/// used to hang the plot).
+fn check_extent(spec: &WorldSpec) -> Result<()> {
+    let [x0, x1, y0, y1] = spec.bounds;
+    check(
+        spec.bounds.iter().all(|b| b.is_finite()) && x1 > x0 && y1 > y0,
+        || format!("bounds {:?} must be finite with min < max", spec.bounds),
+    )?;
+    let inside = |v: f64| v.abs() <= MAX_WORLD_EXTENT;
+    check(
+        spec.bounds.iter().all(|b| inside(*b))
+            && x1 - x0 >= MIN_WORLD_SIZE
+            && y1 - y0 >= MIN_WORLD_SIZE,
+        || {
+            format!(
+                "bounds {:?} must lie within ±{MAX_WORLD_EXTENT:e} m and be at least \
+                 {MIN_WORLD_SIZE} m wide and high",
+                spec.bounds
+            )
+        },
+    )?;
+    let sized = |pos: &[f64; 2], r: f64| {
+        pos.iter().all(|c| inside(*c)) && (MIN_WORLD_SIZE / 100.0..=MAX_WORLD_EXTENT).contains(&r)
+    };
+    for l in &spec.landmarks {
+        check(
+            sized(&l.pos, l.radius) || !l.radius.is_finite() || l.radius <= 0.0,
+            || {
+                format!(
+                    "landmark {}: position {:?} and radius {} must lie within ±{MAX_WORLD_EXTENT:e} m \
+                 (radius at least {} m)",
+                    l.id,
+                    l.pos,
+                    l.radius,
+                    MIN_WORLD_SIZE / 100.0
+                )
+            },
+        )?;
+    }
+    for w in &spec.walls {
+        check(
+            w.start
+                .iter()
+                .chain(&w.end)
+                .all(|c| !c.is_finite() || inside(*c)),
+            || {
+                format!(
+                    "wall {}: end points must lie within ±{MAX_WORLD_EXTENT:e} m",
+                    w.id
+                )
+            },
+        )?;
+    }
+    Ok(())
+}
+
+/// Finite positions, positive radii, walls of non-zero length, ids used once.
+fn check_entities(spec: &WorldSpec) -> Result<()> {
+    let mut ids = std::collections::BTreeSet::new();
+    for l in &spec.landmarks {
+        check(
+            l.pos.iter().all(|c| c.is_finite()) && l.radius.is_finite(),
+            || format!("landmark {}: non-finite position or radius", l.id),
+        )?;
+        check(l.radius > 0.0, || {
+            format!("landmark {}: radius {} must be > 0", l.id, l.radius)
+        })?;
+        check(ids.insert(l.id), || {
+            format!("landmark id {} is used twice", l.id)
+        })?;
+    }
+    for w in &spec.walls {
+        check(w.start.iter().chain(&w.end).all(|c| c.is_finite()), || {
+            format!("wall {}: non-finite end point", w.id)
+        })?;
+        check(
+            (w.start[0] - w.end[0]).hypot(w.start[1] - w.end[1]) > 1e-6,
+            || format!("wall {} has zero length", w.id),
+        )?;
+        check(ids.insert(w.id), || {
+            format!("wall id {} is also used by another landmark or wall", w.id)
+        })?;
+    }
+    for (i, c) in spec.clutter.iter().enumerate() {
+        check(
+            c.pos.iter().all(|x| x.is_finite()) && c.radius.is_finite() && c.radius > 0.0,
+            || format!("clutter {i}: needs a finite position and a radius > 0"),
+        )?;
+    }
+    Ok(())
+}
+
+/// The world's colliders (landmarks, walls, clutter, each tagged with what it is) and their
+/// handles, in that order.
+fn colliders_of(spec: &WorldSpec) -> (ColliderSet, Vec<ColliderHandle>) {
+    let mut colliders = ColliderSet::new();
+    let mut handles = Vec::new();
+    for (i, l) in spec.landmarks.iter().enumerate() {
+        handles.push(
+            colliders.insert(
+                ColliderBuilder::ball(l.radius as f32)
+                    .translation(v(l.pos))
+                    .user_data(Hit::Landmark(i).encode())
+                    .build(),
+            ),
+        );
+    }
+    for (i, w) in spec.walls.iter().enumerate() {
+        handles.push(
+            colliders.insert(
+                ColliderBuilder::segment(v(w.start), v(w.end))
+                    .user_data(Hit::Wall(i).encode())
+                    .build(),
+            ),
+        );
+    }
+    for (i, c) in spec.clutter.iter().enumerate() {
+        handles.push(
+            colliders.insert(
+                ColliderBuilder::ball(c.radius as f32)
+                    .translation(v(c.pos))
+                    .user_data(Hit::Clutter(i).encode())
+                    .build(),
+            ),
+        );
+    }
+    (colliders, handles)
 }

@@ -15,7 +15,6 @@ pub fn render_binary_svg(c: &BinaryCalculus, width: u32) -> String {
     let (cx, cy) = (w / 2.0, w / 2.0 + w * 0.03);
     let r = w * 0.36;
     let font = (w / 40.0).max(8.0);
-    let m = c.partition().m();
     // Screen coordinates of the direction `theta` (counter-clockwise from the heading, which
     // points up) at distance `d` from the point.
     let at = |theta: f64, d: f64| (cx - d * theta.sin(), cy - d * theta.cos());
@@ -37,6 +36,45 @@ pub fn render_binary_svg(c: &BinaryCalculus, width: u32) -> String {
         s,
         r##"<circle cx="{cx:.1}" cy="{cy:.1}" r="{r:.1}" fill="none" stroke="#bbb" stroke-dasharray="4 4"/>"##
     );
+    write_sectors(&mut s, c, &at, [cx, cy, r, font]);
+    // The heading (OPRA) or shared reference direction (STAR).
+    let (hx, hy) = at(0.0, r * 0.45);
+    let _ = write!(
+        s,
+        r##"<line x1="{cx:.1}" y1="{cy:.1}" x2="{hx:.1}" y2="{hy:.1}" stroke="black" stroke-width="3"/><polygon points="{hx:.1},{:.1} {:.1},{:.1} {:.1},{:.1}" fill="black"/><circle cx="{cx:.1}" cy="{cy:.1}" r="{:.1}" fill="black"/>"##,
+        hy - font * 0.6,
+        hx - font * 0.4,
+        hy + font * 0.1,
+        hx + font * 0.4,
+        hy + font * 0.1,
+        font * 0.3
+    );
+    let caption = match c.family() {
+        BinaryFamily::Opra => "heading up; rays (even) and open sectors (odd), counter-clockwise",
+        BinaryFamily::Star => {
+            "reference direction up; half-open sectors own their clockwise edge; eq: same point"
+        }
+    };
+    let _ = write!(
+        s,
+        r##"<text x="{:.1}" y="{:.1}" font-size="{:.1}" text-anchor="middle" fill="#555">{caption}</text>"##,
+        w / 2.0,
+        w - font * 0.8,
+        font * 0.75
+    );
+    s.push_str("</svg>\n");
+    s
+}
+
+/// The rays and sector labels of `c` about the point at (`cx`, `cy`), rays of length `r`,
+/// labels of size `font`; `at(theta, d)` places a direction on the screen.
+fn write_sectors(
+    s: &mut String,
+    c: &BinaryCalculus,
+    at: &dyn Fn(f64, f64) -> (f64, f64),
+    [cx, cy, r, font]: [f64; 4],
+) {
+    let m = c.partition().m();
     match c.family() {
         BinaryFamily::Opra => {
             for k in 0..2 * m {
@@ -81,31 +119,4 @@ pub fn render_binary_svg(c: &BinaryCalculus, width: u32) -> String {
             }
         }
     }
-    // The heading (OPRA) or shared reference direction (STAR).
-    let (hx, hy) = at(0.0, r * 0.45);
-    let _ = write!(
-        s,
-        r##"<line x1="{cx:.1}" y1="{cy:.1}" x2="{hx:.1}" y2="{hy:.1}" stroke="black" stroke-width="3"/><polygon points="{hx:.1},{:.1} {:.1},{:.1} {:.1},{:.1}" fill="black"/><circle cx="{cx:.1}" cy="{cy:.1}" r="{:.1}" fill="black"/>"##,
-        hy - font * 0.6,
-        hx - font * 0.4,
-        hy + font * 0.1,
-        hx + font * 0.4,
-        hy + font * 0.1,
-        font * 0.3
-    );
-    let caption = match c.family() {
-        BinaryFamily::Opra => "heading up; rays (even) and open sectors (odd), counter-clockwise",
-        BinaryFamily::Star => {
-            "reference direction up; half-open sectors own their clockwise edge; eq: same point"
-        }
-    };
-    let _ = write!(
-        s,
-        r##"<text x="{:.1}" y="{:.1}" font-size="{:.1}" text-anchor="middle" fill="#555">{caption}</text>"##,
-        w / 2.0,
-        w - font * 0.8,
-        font * 0.75
-    );
-    s.push_str("</svg>\n");
-    s
 }

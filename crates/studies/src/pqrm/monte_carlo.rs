@@ -280,29 +280,50 @@ fn names(r: &MonteCarloResult) -> Vec<String> {
     names
 }
 
-fn figures(r: &MonteCarloResult, finest: Option<&Calculus>) -> Vec<Figure> {
-    let Some(fine) = names(r).first().cloned() else {
-        return Vec::new();
-    };
-    let xs: Vec<f64> = rows(r, &fine).map(|l| l.sigma_n).collect();
-    let flat = |name: String, v: f64| Line {
+/// A reference line at `v` over the noise levels `xs`.
+fn flat_line(xs: &[f64], name: String, v: f64) -> Line {
+    Line {
         name,
         points: xs.iter().map(|x| (*x, v)).collect(),
         err: None,
         reference: true,
-    };
-    let series = |calc: &str, f: &dyn Fn(&LevelResult) -> (f64, f64), with_err: bool| Line {
+    }
+}
+
+/// One calculus's `(mean, std)` of a level's measure over σ_N, with error bars if asked.
+fn series_line(
+    r: &MonteCarloResult,
+    calc: &str,
+    f: &dyn Fn(&LevelResult) -> (f64, f64),
+    with_err: bool,
+) -> Line {
+    Line {
         name: calc.to_owned(),
         points: rows(r, calc).map(|l| (l.sigma_n, f(l).0)).collect(),
         err: with_err.then(|| rows(r, calc).map(|l| f(l).1).collect()),
         reference: false,
-    };
-    let lines = |name: &str, title: &str, y: &str, series: Vec<Line>| Figure {
+    }
+}
+
+/// A line chart over σ_N.
+fn lines(name: &str, title: &str, y: &str, series: Vec<Line>) -> Figure {
+    Figure {
         name: name.into(),
         title: title.into(),
         x_label: "σ_N".into(),
         y_label: y.into(),
         plot: Plot::Lines { series },
+    }
+}
+
+fn figures(r: &MonteCarloResult, finest: Option<&Calculus>) -> Vec<Figure> {
+    let Some(fine) = names(r).first().cloned() else {
+        return Vec::new();
+    };
+    let xs: Vec<f64> = rows(r, &fine).map(|l| l.sigma_n).collect();
+    let flat = |name: String, v: f64| flat_line(&xs, name, v);
+    let series = |calc: &str, f: &dyn Fn(&LevelResult) -> (f64, f64), with_err: bool| {
+        series_line(r, calc, f, with_err)
     };
     let mut out = Vec::new();
     if let Some(base) = r.baselines.get(&fine) {
@@ -329,39 +350,8 @@ fn figures(r: &MonteCarloResult, finest: Option<&Calculus>) -> Vec<Figure> {
             ],
         ));
     }
-    for (i, sigma) in r.config.detail_sigmas.iter().enumerate() {
-        let points = r
-            .wrong
-            .iter()
-            .filter(|w| w.sigma_r == *sigma)
-            .map(|w| (w.x, w.y, w.d_ab))
-            .collect();
-        let sn = sigma / r.config.sigma_e();
-        out.push(Figure {
-            name: format!("fig2_8{}_wrong_triplets", ['a', 'b'][i.min(1)]),
-            title: format!("Fig 2.8 — wrongly mapped triplets, σ_R = {sigma} m (σ_N = {sn:.2})"),
-            x_label: "x (normalised)".into(),
-            y_label: "y (normalised)".into(),
-            plot: Plot::EdcScatter {
-                points,
-                colour_label: "d(A, B) in m".into(),
-            },
-        });
-    }
-    if let Some(f) = finest {
-        for (i, (sigma, m)) in r.confusion.iter().enumerate() {
-            out.push(Figure {
-                name: format!("fig2_9{}_confusion", ['a', 'b'][i.min(1)]),
-                title: format!("Fig 2.9 — confusion (EDC), σ_R = {sigma} m"),
-                x_label: "ML state".into(),
-                y_label: "true state".into(),
-                plot: Plot::Heatmap {
-                    labels: f.labels().to_vec(),
-                    matrix: m.clone(),
-                },
-            });
-        }
-    }
+    out.extend(wrong_triplet_figures(r));
+    out.extend(confusion_figures(r, finest));
     let names = names(r);
     let all = |f: &dyn Fn(&LevelResult) -> (f64, f64)| -> Vec<Line> {
         names.iter().map(|c| series(c, f, true)).collect()
@@ -397,6 +387,51 @@ fn figures(r: &MonteCarloResult, finest: Option<&Calculus>) -> Vec<Figure> {
         all(&|l| (l.p_ml.mean, 0.0)),
     ));
     out
+}
+
+/// Figs 2.8a–b: the wrongly mapped triplets at the detail noise levels.
+fn wrong_triplet_figures(r: &MonteCarloResult) -> Vec<Figure> {
+    let mut figures = Vec::new();
+    for (i, sigma) in r.config.detail_sigmas.iter().enumerate() {
+        let points = r
+            .wrong
+            .iter()
+            .filter(|w| w.sigma_r == *sigma)
+            .map(|w| (w.x, w.y, w.d_ab))
+            .collect();
+        let sn = sigma / r.config.sigma_e();
+        figures.push(Figure {
+            name: format!("fig2_8{}_wrong_triplets", ['a', 'b'][i.min(1)]),
+            title: format!("Fig 2.8 — wrongly mapped triplets, σ_R = {sigma} m (σ_N = {sn:.2})"),
+            x_label: "x (normalised)".into(),
+            y_label: "y (normalised)".into(),
+            plot: Plot::EdcScatter {
+                points,
+                colour_label: "d(A, B) in m".into(),
+            },
+        });
+    }
+    figures
+}
+
+/// Figs 2.9a–b: the confusion matrices of the finest calculus.
+fn confusion_figures(r: &MonteCarloResult, finest: Option<&Calculus>) -> Vec<Figure> {
+    let mut figures = Vec::new();
+    if let Some(f) = finest {
+        for (i, (sigma, m)) in r.confusion.iter().enumerate() {
+            figures.push(Figure {
+                name: format!("fig2_9{}_confusion", ['a', 'b'][i.min(1)]),
+                title: format!("Fig 2.9 — confusion (EDC), σ_R = {sigma} m"),
+                x_label: "ML state".into(),
+                y_label: "true state".into(),
+                plot: Plot::Heatmap {
+                    labels: f.labels().to_vec(),
+                    matrix: m.clone(),
+                },
+            });
+        }
+    }
+    figures
 }
 
 /// Distance of a normalised point to the nearest curve of a constraint calculus.

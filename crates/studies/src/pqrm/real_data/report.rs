@@ -426,6 +426,39 @@ fn claims(results: &[RealCalculusResult]) -> Vec<Claim> {
     ]
 }
 
+/// The held-out log score against τ, per calculus, relative to τ = 1.
+fn temper_figure(t: &Tempering) -> Figure {
+    let line = |name: String, points: Vec<(f64, f64)>| Line {
+        name,
+        points,
+        err: None,
+        reference: false,
+    };
+    Figure {
+        name: "temper_fit".into(),
+        title: "Held-out log score against τ (relative to τ = 1; the chosen τ is the maximum)"
+            .into(),
+        x_label: "log10 τ".into(),
+        y_label: "gain in mean log predictive probability (nats)".into(),
+        plot: Plot::Lines {
+            series: t
+                .fits
+                .iter()
+                .map(|f| {
+                    let base = f.untempered_score().unwrap_or(0.0);
+                    line(
+                        f.calculus.clone(),
+                        f.scores
+                            .iter()
+                            .map(|p| (p.temper.log10(), p.log_score - base))
+                            .collect(),
+                    )
+                })
+                .collect(),
+        },
+    }
+}
+
 fn figures(out: &RealDataOutput) -> Vec<Figure> {
     let results = &out.main.results;
     let nd_calculi = ["edc", "edc-lune", "triple-cross"];
@@ -500,31 +533,7 @@ fn figures(out: &RealDataOutput) -> Vec<Figure> {
             },
         },
     ];
-    if let Some(t) = &out.main.tempering {
-        figures.push(Figure {
-            name: "temper_fit".into(),
-            title: "Held-out log score against τ (relative to τ = 1; the chosen τ is the maximum)"
-                .into(),
-            x_label: "log10 τ".into(),
-            y_label: "gain in mean log predictive probability (nats)".into(),
-            plot: Plot::Lines {
-                series: t
-                    .fits
-                    .iter()
-                    .map(|f| {
-                        let base = f.untempered_score().unwrap_or(0.0);
-                        line(
-                            f.calculus.clone(),
-                            f.scores
-                                .iter()
-                                .map(|p| (p.temper.log10(), p.log_score - base))
-                                .collect(),
-                        )
-                    })
-                    .collect(),
-            },
-        });
-    }
+    figures.extend(out.main.tempering.as_ref().map(temper_figure));
     figures
 }
 
