@@ -293,17 +293,7 @@ pub fn step_counts(
         slices.push(mine);
         rest = tail;
     }
-    // Each landmark's largest squared norm over its samples: with them, one comparison per
-    // pair of a sample settles the coincidence check (see `Apart`).
-    let max_norm2: Vec<f64> = (0..m)
-        .map(|i| {
-            let (x, y) = samples.columns(i);
-            x.iter()
-                .zip(y)
-                .map(|(x, y)| x * x + y * y)
-                .fold(0.0, f64::max)
-        })
-        .collect();
+    let max_norm2 = max_norms2(samples);
     pairs
         .into_par_iter()
         .zip(slices)
@@ -328,6 +318,20 @@ pub fn step_counts(
         sets,
         counts,
     })
+}
+
+/// Each landmark's largest squared norm over its samples: with them, one comparison per pair
+/// of a sample settles the coincidence check (see `Apart`).
+fn max_norms2(samples: &ScanSamples) -> Vec<f64> {
+    (0..samples.ids().len())
+        .map(|i| {
+            let (x, y) = samples.columns(i);
+            x.iter()
+                .zip(y)
+                .map(|(x, y)| x * x + y * y)
+                .fold(0.0, f64::max)
+        })
+        .collect()
 }
 
 /// Buffers one task reuses for all its triplets (no allocation per triplet).

@@ -223,32 +223,7 @@ impl Pqrm {
             observed: counts.len(),
             ..UpdateReport::default()
         };
-        // slots first: looked up in parallel (read-only), then new sets get a slot in order
-        // (serial: the index is one hash table); a new set's prior is ignored
-        let store = &self.store;
-        let found: Vec<Option<usize>> = counts
-            .sets()
-            .par_iter()
-            .with_min_len(4096)
-            .map(|s| store.slot(s))
-            .collect();
-        let new_sets = found.iter().filter(|f| f.is_none()).count();
-        self.store.reserve_exact(new_sets);
-        let mut slots = Vec::with_capacity(counts.len());
-        let mut fresh = Vec::with_capacity(counts.len());
-        let mut seen = vec![false; self.store.len() + new_sets];
-        let mut repeated = false;
-        let uniform = vec![0.0; q];
-        for (&set, found) in counts.sets().iter().zip(found) {
-            let (slot, new) = match found {
-                Some(slot) => (slot, false),
-                // a set listed twice in one step is new only the first time
-                None => self.store.slot_or_push(set, &uniform, 0),
-            };
-            repeated |= std::mem::replace(&mut seen[slot], true);
-            slots.push(slot);
-            fresh.push(new);
-        }
+        let (slots, fresh, repeated) = self.slots_for(counts);
         report.new = fresh.iter().filter(|f| **f).count();
         if repeated {
             // a set twice in one step: its second update needs the first one's result
@@ -295,6 +270,38 @@ impl Pqrm {
         }
         self.steps += 1;
         Ok(report)
+    }
+
+    /// Each set's slot in the store, whether it is new, and whether a set is listed twice.
+    /// Slots are looked up in parallel (read-only), then new sets get a slot in order
+    /// (serial: the index is one hash table); a new set's prior is ignored.
+    fn slots_for(&mut self, counts: &StepCounts) -> (Vec<usize>, Vec<bool>, bool) {
+        let q = self.calculus.n_states();
+        let store = &self.store;
+        let found: Vec<Option<usize>> = counts
+            .sets()
+            .par_iter()
+            .with_min_len(4096)
+            .map(|s| store.slot(s))
+            .collect();
+        let new_sets = found.iter().filter(|f| f.is_none()).count();
+        self.store.reserve_exact(new_sets);
+        let mut slots = Vec::with_capacity(counts.len());
+        let mut fresh = Vec::with_capacity(counts.len());
+        let mut seen = vec![false; self.store.len() + new_sets];
+        let mut repeated = false;
+        let uniform = vec![0.0; q];
+        for (&set, found) in counts.sets().iter().zip(found) {
+            let (slot, new) = match found {
+                Some(slot) => (slot, false),
+                // a set listed twice in one step is new only the first time
+                None => self.store.slot_or_push(set, &uniform, 0),
+            };
+            repeated |= std::mem::replace(&mut seen[slot], true);
+            slots.push(slot);
+            fresh.push(new);
+        }
+        (slots, fresh, repeated)
     }
 
     /// The belief of an ordered set `{a, b : c}` as probabilities in state order.

@@ -275,8 +275,9 @@ fn bad(field: &str, why: impl std::fmt::Display) -> PqrmError {
     PqrmError::Format(format!("binary map, field `{field}`: {why}"))
 }
 
-/// Decodes the binary layout, checking sizes and checksum before reading any table.
-pub(crate) fn decode_binary(bytes: &[u8]) -> Result<MapParts> {
+/// The prefix's fields — header length, sets, states — checked: the magic, the version,
+/// and the size they announce against the file's.
+fn check_layout(bytes: &[u8]) -> Result<(usize, u64, u32)> {
     if bytes.len() < PREFIX + TRAILER {
         return Err(bad(
             "magic",
@@ -317,6 +318,12 @@ pub(crate) fn decode_binary(bytes: &[u8]) -> Result<MapParts> {
             ),
         ));
     }
+    Ok((header_len, n_sets, n_states))
+}
+
+/// Decodes the binary layout, checking sizes and checksum before reading any table.
+pub(crate) fn decode_binary(bytes: &[u8]) -> Result<MapParts> {
+    let (header_len, n_sets, n_states) = check_layout(bytes)?;
     let body = bytes.len() - TRAILER;
     let stored = u32_at(bytes, body);
     let crc = crc32fast::hash(&bytes[..body]);

@@ -187,31 +187,12 @@ pub fn check(
         .collect();
     links.sort_unstable();
     links.dedup();
-    let circle = links.iter().all(|&l| {
-        (world.position)(l).is_some_and(|c| {
-            (0..CIRCLE_SAMPLES).all(|k| {
-                let a = std::f64::consts::TAU * k as f64 / CIRCLE_SAMPLES as f64;
-                let x = [c[0] + range * a.cos(), c[1] + range * a.sin()];
-                (world.drivable)(x) && (world.sensed_from)(x, l)
-            })
-        })
-    });
+    let circle = links.iter().all(|&l| circle_clear(world, l, range));
     let sight_lines = all_points
-        && elements.iter().zip(&located).all(|(ids, p)| {
-            let Some(p) = p else { return false };
-            (0..3).all(|i| {
-                let (a, b) = (p[i], p[(i + 1) % 3]);
-                let n = (dist(a, b) * LINE_SAMPLES_PER_M).ceil().max(1.0) as usize;
-                // the end points are the landmarks themselves: the robot drives up to them
-                (1..n).all(|k| {
-                    let t = k as f64 / n as f64;
-                    let x = [a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1])];
-                    (world.drivable)(x)
-                        && (world.sensed_from)(x, ids[i])
-                        && (world.sensed_from)(x, ids[(i + 1) % 3])
-                })
-            })
-        });
+        && elements
+            .iter()
+            .zip(&located)
+            .all(|(ids, p)| p.is_some_and(|p| sides_clear(world, ids, &p)));
     BoundCheck::new(
         range,
         transitions,
@@ -224,6 +205,35 @@ pub fn check(
             straight,
         },
     )
+}
+
+/// Assumptions 1 (ii) and 2 for link `l`: the circle of radius `range` about it is drivable
+/// and `l` is sensed from every point of it.
+fn circle_clear(world: &Geometry<'_>, l: u32, range: f64) -> bool {
+    (world.position)(l).is_some_and(|c| {
+        (0..CIRCLE_SAMPLES).all(|k| {
+            let a = std::f64::consts::TAU * k as f64 / CIRCLE_SAMPLES as f64;
+            let x = [c[0] + range * a.cos(), c[1] + range * a.sin()];
+            (world.drivable)(x) && (world.sensed_from)(x, l)
+        })
+    })
+}
+
+/// Assumption 3 (ii) for one element: along each side of its triangle the robot can drive and
+/// sees both end landmarks (the end points are the landmarks themselves: the robot drives
+/// up to them).
+fn sides_clear(world: &Geometry<'_>, ids: &[u32; 3], p: &[[f64; 2]; 3]) -> bool {
+    (0..3).all(|i| {
+        let (a, b) = (p[i], p[(i + 1) % 3]);
+        let n = (dist(a, b) * LINE_SAMPLES_PER_M).ceil().max(1.0) as usize;
+        (1..n).all(|k| {
+            let t = k as f64 / n as f64;
+            let x = [a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1])];
+            (world.drivable)(x)
+                && (world.sensed_from)(x, ids[i])
+                && (world.sensed_from)(x, ids[(i + 1) % 3])
+        })
+    })
 }
 
 fn dist(a: [f64; 2], b: [f64; 2]) -> f64 {

@@ -597,6 +597,83 @@ fn decode_chosen(
     Ok((scans, range_scans))
 }
 
+/// With no topic named: every detection topic with messages, else the one scan topic;
+/// `Err(why)` when there is none or several scan topics.
+fn readable_topics(channels: &BTreeMap<u16, Channel>) -> std::result::Result<Vec<u16>, String> {
+    let of = |pred: &dyn Fn(Kind) -> bool| -> Vec<u16> {
+        channels
+            .iter()
+            .filter(|(_, c)| c.info.kind.is_some_and(pred) && c.info.messages > 0)
+            .map(|(id, _)| *id)
+            .collect()
+    };
+    let mut chosen = of(&|k| k == Kind::Detections);
+    if chosen.is_empty() {
+        chosen = of(&Kind::is_scan);
+        if chosen.len() > 1 {
+            let names: Vec<&str> = chosen
+                .iter()
+                .map(|id| channels[id].info.topic.as_str())
+                .collect();
+            return Err(format!(
+                "several scan topics ({}): name the ones to read with --topic",
+                names.join(", ")
+            ));
+        }
+    }
+    if chosen.is_empty() {
+        return Err(format!("no topic with messages qrm can read ({READABLE})"));
+    }
+    Ok(chosen)
+}
+
+/// The topics named, each present and readable, and some with messages.
+fn named_topics(
+    channels: &BTreeMap<u16, Channel>,
+    path: &Path,
+    options: &ReadOptions,
+    listed: &str,
+) -> Result<Vec<u16>> {
+    let mut chosen: Vec<u16> = Vec::new();
+    for topic in &options.topics {
+        let ids: Vec<u16> = channels
+            .iter()
+            .filter(|(_, c)| &c.info.topic == topic)
+            .map(|(id, _)| *id)
+            .collect();
+        if ids.is_empty() {
+            return Err(LogError::MissingTopic {
+                path: path.to_path_buf(),
+                topic: topic.clone(),
+                present: listed.to_owned(),
+            });
+        }
+        for id in ids {
+            let c = &channels[&id];
+            if c.info.kind.is_none() {
+                return Err(LogError::UnsupportedSchema {
+                    path: path.to_path_buf(),
+                    topic: topic.clone(),
+                    schema: format!("`{}` ({})", c.info.schema, c.info.encoding),
+                    readable: READABLE,
+                    present: listed.to_owned(),
+                });
+            }
+            if !chosen.contains(&id) {
+                chosen.push(id);
+            }
+        }
+    }
+    if chosen.iter().all(|id| channels[id].info.messages == 0) {
+        return Err(LogError::ChooseTopic {
+            path: path.to_path_buf(),
+            reason: format!("topic(s) {} have no messages", options.topics.join(", ")),
+            present: listed.to_owned(),
+        });
+    }
+    Ok(chosen)
+}
+
 /// The channels to read, in topic order.
 fn choose(
     channels: &mut BTreeMap<u16, Channel>,
@@ -609,71 +686,11 @@ fn choose(
         reason,
         present: listed.clone(),
     };
-    let mut chosen: Vec<u16> = Vec::new();
-    if options.topics.is_empty() {
-        let of = |pred: &dyn Fn(Kind) -> bool| -> Vec<u16> {
-            channels
-                .iter()
-                .filter(|(_, c)| c.info.kind.is_some_and(pred) && c.info.messages > 0)
-                .map(|(id, _)| *id)
-                .collect()
-        };
-        chosen = of(&|k| k == Kind::Detections);
-        if chosen.is_empty() {
-            chosen = of(&Kind::is_scan);
-            if chosen.len() > 1 {
-                let names: Vec<&str> = chosen
-                    .iter()
-                    .map(|id| channels[id].info.topic.as_str())
-                    .collect();
-                return Err(choose_err(format!(
-                    "several scan topics ({}): name the ones to read with --topic",
-                    names.join(", ")
-                )));
-            }
-        }
-        if chosen.is_empty() {
-            return Err(choose_err(format!(
-                "no topic with messages qrm can read ({READABLE})"
-            )));
-        }
+    let chosen = if options.topics.is_empty() {
+        readable_topics(channels).map_err(choose_err)?
     } else {
-        for topic in &options.topics {
-            let ids: Vec<u16> = channels
-                .iter()
-                .filter(|(_, c)| &c.info.topic == topic)
-                .map(|(id, _)| *id)
-                .collect();
-            if ids.is_empty() {
-                return Err(LogError::MissingTopic {
-                    path: path.to_path_buf(),
-                    topic: topic.clone(),
-                    present: listed,
-                });
-            }
-            for id in ids {
-                let c = &channels[&id];
-                if c.info.kind.is_none() {
-                    return Err(LogError::UnsupportedSchema {
-                        path: path.to_path_buf(),
-                        topic: topic.clone(),
-                        schema: format!("`{}` ({})", c.info.schema, c.info.encoding),
-                        readable: READABLE,
-                        present: listed,
-                    });
-                }
-                if !chosen.contains(&id) {
-                    chosen.push(id);
-                }
-            }
-        }
-        if chosen.iter().all(|id| channels[id].info.messages == 0) {
-            return Err(choose_err(format!(
-                "topic(s) {} have no messages",
-                options.topics.join(", ")
-            )));
-        }
-    }
+        named_topics(channels, path, options, &listed)?
+    };
     let scans = chosen
         .iter()
         .filter(|id| channels[id].info.kind.is_some_and(Kind::is_scan))

@@ -16,20 +16,7 @@ pub fn figure(f: &Figure) -> Result<Picture> {
     match &f.plot {
         Plot::Histogram { edges, groups } => histogram(&f.title, &f.x_label, edges, groups),
         Plot::Lines { series } => {
-            let series: Vec<Series> = series
-                .iter()
-                .map(|l| {
-                    let s = if l.reference {
-                        Series::reference(l.name.clone(), l.points.clone())
-                    } else {
-                        Series::line(l.name.clone(), l.points.clone())
-                    };
-                    match &l.err {
-                        Some(e) => s.with_err(e.clone()),
-                        None => s,
-                    }
-                })
-                .collect();
+            let series: Vec<Series> = series.iter().map(series_of).collect();
             line_chart(&f.title, &f.x_label, &f.y_label, &series)
         }
         Plot::EdcScatter {
@@ -66,35 +53,51 @@ pub fn figure(f: &Figure) -> Result<Picture> {
             runs_map(&f.title, world, drive, &runs)
         }
         Plot::ReferencePair { observed, inferred } => reference_pair(&f.title, observed, inferred),
-        Plot::Navigation(n) => {
-            let panel = n.regions.as_ref().map(|r| {
-                (
-                    r.title.clone(),
-                    RegionPicture {
-                        window: r.window,
-                        nx: r.nx,
-                        ny: r.ny,
-                        cell_region: &r.cell_region,
-                        points: &[],
-                        highlight: &[],
-                        shade: None,
-                        marks: &r.marks,
-                        numbers: true,
-                    },
-                )
-            });
-            demo_picture(&DemoPicture {
-                title: f.title.clone(),
-                world: &n.world,
-                drive: &n.drive,
-                trajectory: &n.trajectory,
-                searches: &n.searches,
-                plan: &n.plan,
-                links: &n.links,
-                start: n.start,
-                goal: n.goal,
-                regions: panel,
-            })
-        }
+        Plot::Navigation(n) => navigation(&f.title, n),
     }
+}
+
+/// A study's line as the chart's series: a reference line, or a line with error bars.
+fn series_of(l: &studies::report::Line) -> Series {
+    let s = if l.reference {
+        Series::reference(l.name.clone(), l.points.clone())
+    } else {
+        Series::line(l.name.clone(), l.points.clone())
+    };
+    match &l.err {
+        Some(e) => s.with_err(e.clone()),
+        None => s,
+    }
+}
+
+/// The demo's navigation picture, with the learned calculus's regions beside it.
+fn navigation(title: &str, n: &studies::report::NavigationPicture) -> Result<Picture> {
+    let panel = n.regions.as_ref().map(|r| {
+        (
+            r.title.clone(),
+            RegionPicture {
+                window: r.window,
+                nx: r.nx,
+                ny: r.ny,
+                cell_region: &r.cell_region,
+                points: &[],
+                highlight: &[],
+                shade: None,
+                marks: &r.marks,
+                numbers: true,
+            },
+        )
+    });
+    demo_picture(&DemoPicture {
+        title: title.to_owned(),
+        world: &n.world,
+        drive: &n.drive,
+        trajectory: &n.trajectory,
+        searches: &n.searches,
+        plan: &n.plan,
+        links: &n.links,
+        start: n.start,
+        goal: n.goal,
+        regions: panel,
+    })
 }

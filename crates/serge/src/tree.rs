@@ -253,6 +253,40 @@ impl<'a> ResolutionTree<'a> {
         [s[0] / n, s[1] / n]
     }
 
+    /// The children's adjacency graph (edges weighted by the distance between centroids),
+    /// each child's node, and the centroids.
+    fn children_graph(
+        &self,
+        children: &[usize],
+    ) -> (UnGraph<usize, f64>, Vec<NodeIndex>, Vec<[f64; 2]>) {
+        let grid = *self.masses.grid();
+        let mut g: UnGraph<usize, f64> = UnGraph::default();
+        let idx: Vec<NodeIndex> = children.iter().map(|&c| g.add_node(c)).collect();
+        let mut owner = vec![usize::MAX; grid.len()];
+        for (i, &c) in children.iter().enumerate() {
+            for &cell in &self.nodes[c].cells {
+                owner[cell] = i;
+            }
+        }
+        let mut pairs = std::collections::BTreeSet::new();
+        for &c in children {
+            for &cell in &self.nodes[c].cells {
+                for nb in grid.neighbours(cell) {
+                    let (a, b) = (owner[cell], owner[nb]);
+                    if a != usize::MAX && b != usize::MAX && a != b {
+                        pairs.insert((a.min(b), a.max(b)));
+                    }
+                }
+            }
+        }
+        let cent: Vec<[f64; 2]> = children.iter().map(|&c| self.centroid(c)).collect();
+        let dist = |a: [f64; 2], b: [f64; 2]| (a[0] - b[0]).hypot(a[1] - b[1]);
+        for (a, b) in pairs {
+            g.add_edge(idx[a], idx[b], dist(cent[a], cent[b]));
+        }
+        (g, idx, cent)
+    }
+
     /// Plans from `start` to `goal` coarse-to-fine (§3.4.3), splitting nodes on the way with
     /// `params` until the goal's node holds one belief or `max_levels` levels are used.
     ///
@@ -287,31 +321,8 @@ impl<'a> ResolutionTree<'a> {
             let to = self
                 .containing(&children, goal)
                 .ok_or_else(|| SergeError::InvalidParameter("goal outside the node".into()))?;
-            // adjacency of the children
-            let mut g: UnGraph<usize, f64> = UnGraph::default();
-            let idx: Vec<NodeIndex> = children.iter().map(|&c| g.add_node(c)).collect();
-            let mut owner = vec![usize::MAX; grid.len()];
-            for (i, &c) in children.iter().enumerate() {
-                for &cell in &self.nodes[c].cells {
-                    owner[cell] = i;
-                }
-            }
-            let mut pairs = std::collections::BTreeSet::new();
-            for &c in &children {
-                for &cell in &self.nodes[c].cells {
-                    for nb in grid.neighbours(cell) {
-                        let (a, b) = (owner[cell], owner[nb]);
-                        if a != usize::MAX && b != usize::MAX && a != b {
-                            pairs.insert((a.min(b), a.max(b)));
-                        }
-                    }
-                }
-            }
-            let cent: Vec<[f64; 2]> = children.iter().map(|&c| self.centroid(c)).collect();
+            let (g, idx, cent) = self.children_graph(&children);
             let dist = |a: [f64; 2], b: [f64; 2]| (a[0] - b[0]).hypot(a[1] - b[1]);
-            for (a, b) in pairs {
-                g.add_edge(idx[a], idx[b], dist(cent[a], cent[b]));
-            }
             let ia = children.iter().position(|&c| c == from).unwrap_or(0);
             let ib = children.iter().position(|&c| c == to).unwrap_or(0);
             let goal_c = cent[ib];

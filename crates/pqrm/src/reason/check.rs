@@ -37,6 +37,17 @@ pub struct MapCheck {
     pub closures: usize,
 }
 
+/// A relaxed set with its most likely state and that state's probability.
+fn flagged_entry(map: &Pqrm, s: LandmarkSet) -> FlaggedEntry {
+    let p = map.belief(s).unwrap_or_default();
+    let ml = select(&p, Selection::MostLikely)[0];
+    FlaggedEntry {
+        set: s.ids(),
+        state: map.calculus().label(ml).to_owned(),
+        p: p.get(ml.index()).copied().unwrap_or(0.0),
+    }
+}
+
 /// How sure the map is of a set's most likely state: `−ln P(not ML)` in nats, computed in log
 /// space from the stored belief, so beliefs whose P(ML) rounds to 1 in f64 still rank (a set
 /// seen in 40 frames above one seen in 2).
@@ -138,19 +149,7 @@ pub fn check(map: &Pqrm) -> Result<MapCheck> {
             relaxed.insert(s);
         }
     }
-    let calc = map.calculus();
-    let mut flagged: Vec<FlaggedEntry> = relaxed
-        .iter()
-        .map(|s| {
-            let p = map.belief(*s).unwrap_or_default();
-            let ml = select(&p, Selection::MostLikely)[0];
-            FlaggedEntry {
-                set: s.ids(),
-                state: calc.label(ml).to_owned(),
-                p: p.get(ml.index()).copied().unwrap_or(0.0),
-            }
-        })
-        .collect();
+    let mut flagged: Vec<FlaggedEntry> = relaxed.iter().map(|s| flagged_entry(map, *s)).collect();
     flagged.sort_by(|a, b| a.p.total_cmp(&b.p).then(a.set.cmp(&b.set)));
     Ok(MapCheck {
         sets: sets.len(),

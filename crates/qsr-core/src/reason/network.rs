@@ -609,6 +609,19 @@ pub(crate) mod sexpr {
     /// The most nesting accepted (SparQ networks nest three deep).
     const MAX_DEPTH: usize = 64;
 
+    /// An atom: `first` and the characters up to white space, a parenthesis or a comment.
+    fn read_atom(first: char, chars: &mut std::iter::Peekable<std::str::Chars<'_>>) -> String {
+        let mut atom = String::from(first);
+        while let Some(&n) = chars.peek() {
+            if n.is_whitespace() || n == '(' || n == ')' || n == ';' {
+                break;
+            }
+            atom.push(n);
+            chars.next();
+        }
+        atom
+    }
+
     pub(crate) fn parse(text: &str) -> crate::Result<Expr> {
         let mut chars = text.chars().peekable();
         let (mut line, mut column) = (1usize, 1usize);
@@ -657,15 +670,8 @@ pub(crate) mod sexpr {
                 }
                 c2 if c2.is_whitespace() => {}
                 _ => {
-                    let mut atom = String::from(ch);
-                    while let Some(&n) = chars.peek() {
-                        if n.is_whitespace() || n == '(' || n == ')' || n == ';' {
-                            break;
-                        }
-                        atom.push(n);
-                        column += 1;
-                        chars.next();
-                    }
+                    let atom = read_atom(ch, &mut chars);
+                    column += atom.chars().count() - 1;
                     let e = Expr {
                         line: l,
                         column: c,

@@ -326,6 +326,43 @@ pub fn field_graph(
     Ok((graph, pomdps))
 }
 
+/// The drive from `end` to the centroid of element `e`'s landmarks in view, in steps, and
+/// whether the goal landmark came into view on the way, and its length (empty when none is
+/// in view).
+fn drive_to_centroid(
+    field: &FieldMap,
+    perception: &LidarPerception<'_>,
+    e: usize,
+    end: [f64; 2],
+    goal: u32,
+    config: &NavConfig,
+) -> (Vec<[f64; 2]>, bool, f64) {
+    let pts: Vec<[f64; 2]> = field.map.elements()[e]
+        .landmarks
+        .iter()
+        .filter_map(|&l| perception.position(l))
+        .collect();
+    if pts.is_empty() {
+        return (Vec::new(), false, 0.0);
+    }
+    let n = pts.len() as f64;
+    let c = pts
+        .iter()
+        .fold([0.0, 0.0], |m, p| [m[0] + p[0] / n, m[1] + p[1] / n]);
+    let dist = (c[0] - end[0]).hypot(c[1] - end[1]);
+    let k = (dist / config.step).ceil().max(1.0) as usize;
+    let mut seen = false;
+    let drive = (1..=k)
+        .map(|i| {
+            let t = i as f64 / k as f64;
+            let p = [end[0] + t * (c[0] - end[0]), end[1] + t * (c[1] - end[1])];
+            seen |= perception.sees(p, goal);
+            p
+        })
+        .collect();
+    (drive, seen, dist)
+}
+
 /// Runs one trial.
 ///
 /// # Errors
@@ -356,26 +393,11 @@ pub fn run_trial(
             .find(|&e| field.map.elements()[e].landmarks.contains(&task.goal));
         let mut goal_seen = perception.sees(end, task.goal);
         if let Some(e) = element {
-            let pts: Vec<[f64; 2]> = field.map.elements()[e]
-                .landmarks
-                .iter()
-                .filter_map(|&l| perception.position(l))
-                .collect();
-            if !pts.is_empty() {
-                let n = pts.len() as f64;
-                let c = pts
-                    .iter()
-                    .fold([0.0, 0.0], |m, p| [m[0] + p[0] / n, m[1] + p[1] / n]);
-                let dist = (c[0] - end[0]).hypot(c[1] - end[1]);
-                let k = (dist / config.step).ceil().max(1.0) as usize;
-                for i in 1..=k {
-                    let t = i as f64 / k as f64;
-                    let p = [end[0] + t * (c[0] - end[0]), end[1] + t * (c[1] - end[1])];
-                    trajectory.push(p);
-                    goal_seen |= perception.sees(p, task.goal);
-                }
-                length += dist;
-            }
+            let (drive, seen, dist) =
+                drive_to_centroid(field, &perception, e, end, task.goal, config);
+            goal_seen |= seen;
+            length += dist;
+            trajectory.extend(drive);
         }
         // the goal element was "reached" on objects that are not its landmarks: the
         // thesis's wrong goal triplet
