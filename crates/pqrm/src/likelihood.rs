@@ -715,6 +715,100 @@ impl SixForms {
     }
 }
 
+/// Each sample's key from its frame `(x, y, n)`: bit `b` says quantity `b` is positive,
+/// bit `32 + b` that it is exactly zero.
+#[inline(always)]
+fn fill_keys(forms: &SixForms, key: &mut [u64], x: &[f64], y: &[f64], n: &[f64]) {
+    let vars = [n, x, y];
+    for (b, quantity) in forms.quantities.iter().enumerate() {
+        // masks selected by the comparisons (compare, and, or), not bits shifted into
+        // place per lane
+        let (gt, zero) = (1u64 << b, 1u64 << (32 + b));
+        match *quantity {
+            Quantity::Single { var, t } => {
+                key.iter_mut().zip(vars[var]).for_each(|(kv, &u)| {
+                    *kv |= (if u > t { gt } else { 0 }) | (if u == t { zero } else { 0 });
+                });
+            }
+            Quantity::General {
+                coef: [fa, fb, fc, fd],
+            } => {
+                key.iter_mut()
+                    .zip(x)
+                    .zip(y)
+                    .zip(n)
+                    .for_each(|(((kv, &x), &y), &n)| {
+                        let v = fa * n + fb * x + fc * y + fd;
+                        *kv |= (if v > 0.0 { gt } else { 0 }) | (if v == 0.0 { zero } else { 0 });
+                    });
+            }
+        }
+    }
+}
+
+/// The histogram of keys without a zero quantity, folded into each ordering's state counts.
+#[inline(always)]
+fn fold_histogram<const ORDERS: usize>(
+    forms: &SixForms,
+    hist: &[[u32; 4]],
+    q: usize,
+    out: &mut [u32],
+) {
+    for (kv, lanes) in hist.iter().enumerate() {
+        let n: u32 = lanes.iter().sum();
+        if n > 0 {
+            for (o, c) in out.chunks_exact_mut(q).enumerate().take(ORDERS) {
+                c[usize::from(forms.states[kv][o])] += n;
+            }
+        }
+    }
+}
+
+/// Counts one chunk's keys: a key without a zero quantity into the histogram (four lanes),
+/// one with a zero quantity straight into `out` through the constraints' zero sides.
+#[inline(always)]
+fn count_keys<const ORDERS: usize>(
+    forms: &SixForms,
+    (table, q): (&[u16], usize),
+    key: &[u64],
+    hist: &mut [[u32; 4]; HIST_BINS],
+    signs: &mut [i8],
+    out: &mut [u32],
+) {
+    let mut quads = key.chunks_exact(4);
+    let mut slow = |kv: u64, out: &mut [u32]| {
+        // a quantity exactly zero: the constraints' zero sides decide
+        for (b, sg) in signs.iter_mut().enumerate() {
+            *sg = if kv >> (32 + b) & 1 == 1 {
+                0
+            } else if kv >> b & 1 == 1 {
+                1
+            } else {
+                -1
+            };
+        }
+        for (o, c) in out.chunks_exact_mut(q).enumerate().take(ORDERS) {
+            c[usize::from(table[SixForms::bin(&forms.members[o], signs)])] += 1;
+        }
+    };
+    for quad in &mut quads {
+        for (lane, &kv) in quad.iter().enumerate() {
+            if kv >> 32 == 0 {
+                hist[kv as usize & (HIST_BINS - 1)][lane] += 1;
+            } else {
+                slow(kv, out);
+            }
+        }
+    }
+    for &kv in quads.remainder() {
+        if kv >> 32 == 0 {
+            hist[kv as usize & (HIST_BINS - 1)][0] += 1;
+        } else {
+            slow(kv, out);
+        }
+    }
+}
+
 /// [`triplet_counts`] for the `ORDERS` orderings of a line-and-circle calculus via
 /// [`SixForms`] (built for as many).
 #[inline(always)]
@@ -787,73 +881,10 @@ fn six_counts<const ORDERS: usize>(
         let (x, y, n) = (&xs[..len], &ys[..len], &ns[..len]);
         let key = &mut keys[..len];
         key.fill(0);
-        let vars = [n, x, y];
-        for (b, quantity) in forms.quantities.iter().enumerate() {
-            // masks selected by the comparisons (compare, and, or), not bits shifted into
-            // place per lane
-            let (gt, zero) = (1u64 << b, 1u64 << (32 + b));
-            match *quantity {
-                Quantity::Single { var, t } => {
-                    key.iter_mut().zip(vars[var]).for_each(|(kv, &u)| {
-                        *kv |= (if u > t { gt } else { 0 }) | (if u == t { zero } else { 0 });
-                    });
-                }
-                Quantity::General {
-                    coef: [fa, fb, fc, fd],
-                } => {
-                    key.iter_mut()
-                        .zip(x)
-                        .zip(y)
-                        .zip(n)
-                        .for_each(|(((kv, &x), &y), &n)| {
-                            let v = fa * n + fb * x + fc * y + fd;
-                            *kv |=
-                                (if v > 0.0 { gt } else { 0 }) | (if v == 0.0 { zero } else { 0 });
-                        });
-                }
-            }
-        }
-        let mut quads = key.chunks_exact(4);
-        let mut slow = |kv: u64, out: &mut [u32]| {
-            // a quantity exactly zero: the constraints' zero sides decide
-            for (b, sg) in signs.iter_mut().enumerate() {
-                *sg = if kv >> (32 + b) & 1 == 1 {
-                    0
-                } else if kv >> b & 1 == 1 {
-                    1
-                } else {
-                    -1
-                };
-            }
-            for (o, c) in out.chunks_exact_mut(q).enumerate().take(ORDERS) {
-                c[usize::from(table[SixForms::bin(&forms.members[o], &signs)])] += 1;
-            }
-        };
-        for quad in &mut quads {
-            for (lane, &kv) in quad.iter().enumerate() {
-                if kv >> 32 == 0 {
-                    hist[kv as usize & (HIST_BINS - 1)][lane] += 1;
-                } else {
-                    slow(kv, out);
-                }
-            }
-        }
-        for &kv in quads.remainder() {
-            if kv >> 32 == 0 {
-                hist[kv as usize & (HIST_BINS - 1)][0] += 1;
-            } else {
-                slow(kv, out);
-            }
-        }
+        fill_keys(forms, key, x, y, n);
+        count_keys::<ORDERS>(forms, (table, q), key, hist, &mut signs, out);
     }
-    for (kv, lanes) in hist[..1 << g].iter().enumerate() {
-        let n: u32 = lanes.iter().sum();
-        if n > 0 {
-            for (o, c) in out.chunks_exact_mut(q).enumerate().take(ORDERS) {
-                c[usize::from(forms.states[kv][o])] += n;
-            }
-        }
-    }
+    fold_histogram::<ORDERS>(forms, &hist[..1 << g], q, out);
     Ok(())
 }
 

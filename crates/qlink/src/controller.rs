@@ -358,33 +358,7 @@ pub fn closest_point(
                 _ => {}
             }
         }
-        let p_mat = CscMatrix::from(&[[2.0, 0.0], [0.0, 2.0]]);
-        let q = vec![-2.0 * (robot[0] - a[0]), -2.0 * (robot[1] - a[1])];
-        // CSC by columns: column 0 holds the x coefficients, column 1 the y ones
-        let m_rows = rows.len();
-        let a_mat = CscMatrix::new(
-            m_rows,
-            2,
-            vec![0, m_rows, 2 * m_rows],
-            (0..m_rows).chain(0..m_rows).collect(),
-            rows.iter()
-                .map(|r| r[0])
-                .chain(rows.iter().map(|r| r[1]))
-                .collect(),
-        );
-        let cones = [NonnegativeConeT(rows.len())];
-        let settings = DefaultSettingsBuilder::default()
-            .verbose(false)
-            .build()
-            .map_err(|e| QlinkError::InvalidParameter(format!("clarabel settings: {e:?}")))?;
-        let mut solver = DefaultSolver::new(&p_mat, &q, &a_mat, &rhs, &cones, settings)
-            .map_err(|e| QlinkError::InvalidParameter(format!("clarabel: {e:?}")))?;
-        solver.solve();
-        if matches!(
-            solver.solution.status,
-            SolverStatus::Solved | SolverStatus::AlmostSolved
-        ) {
-            let x = [a[0] + solver.solution.x[0], a[1] + solver.solution.x[1]];
+        if let Some(x) = nearest_in_piece(&rows, &rhs, a, robot)? {
             let d = dist(x, robot);
             if best.is_none_or(|(_, bd)| d < bd) {
                 best = Some((x, d));
@@ -394,6 +368,43 @@ pub fn closest_point(
     best.map(|(x, _)| x).ok_or_else(|| {
         QlinkError::InvalidParameter(format!("state {target} has no feasible convex piece"))
     })
+}
+
+/// The point of the convex piece `rows · (x − a) ≤ rhs` nearest `robot` (clarabel QP), or
+/// `None` when the piece is infeasible.
+fn nearest_in_piece(
+    rows: &[[f64; 2]],
+    rhs: &[f64],
+    a: [f64; 2],
+    robot: [f64; 2],
+) -> Result<Option<[f64; 2]>> {
+    let p_mat = CscMatrix::from(&[[2.0, 0.0], [0.0, 2.0]]);
+    let q = vec![-2.0 * (robot[0] - a[0]), -2.0 * (robot[1] - a[1])];
+    // CSC by columns: column 0 holds the x coefficients, column 1 the y ones
+    let m_rows = rows.len();
+    let a_mat = CscMatrix::new(
+        m_rows,
+        2,
+        vec![0, m_rows, 2 * m_rows],
+        (0..m_rows).chain(0..m_rows).collect(),
+        rows.iter()
+            .map(|r| r[0])
+            .chain(rows.iter().map(|r| r[1]))
+            .collect(),
+    );
+    let cones = [NonnegativeConeT(rows.len())];
+    let settings = DefaultSettingsBuilder::default()
+        .verbose(false)
+        .build()
+        .map_err(|e| QlinkError::InvalidParameter(format!("clarabel settings: {e:?}")))?;
+    let mut solver = DefaultSolver::new(&p_mat, &q, &a_mat, rhs, &cones, settings)
+        .map_err(|e| QlinkError::InvalidParameter(format!("clarabel: {e:?}")))?;
+    solver.solve();
+    Ok(matches!(
+        solver.solution.status,
+        SolverStatus::Solved | SolverStatus::AlmostSolved
+    )
+    .then(|| [a[0] + solver.solution.x[0], a[1] + solver.solution.x[1]]))
 }
 
 #[cfg(test)]

@@ -362,6 +362,37 @@ impl Pqrm {
     }
 }
 
+/// One scan as `{"t", "robot", "ids", "xy", "cov"}` (NumPy arrays; cov rows
+/// `[cxx, cxy, cyy]`).
+fn scan_dict<'py>(py: Python<'py>, s: &pqrm::Scan) -> PyResult<Bound<'py, PyDict>> {
+    let d = PyDict::new(py);
+    d.set_item("t", s.t)?;
+    d.set_item("robot", s.robot)?;
+    d.set_item(
+        "ids",
+        s.observations
+            .iter()
+            .map(|o| i64::from(o.id.0))
+            .collect::<Vec<_>>()
+            .into_pyarray(py),
+    )?;
+    let xy: Vec<Vec<f64>> = s.observations.iter().map(|o| o.mean.to_vec()).collect();
+    let cov: Vec<Vec<f64>> = s
+        .observations
+        .iter()
+        .map(|o| vec![o.cov[0][0], o.cov[0][1], o.cov[1][1]])
+        .collect();
+    d.set_item(
+        "xy",
+        PyArray2::from_vec2(py, &xy).map_err(|e| invalid(e.to_string()))?,
+    )?;
+    d.set_item(
+        "cov",
+        PyArray2::from_vec2(py, &cov).map_err(|e| invalid(e.to_string()))?,
+    )?;
+    Ok(d)
+}
+
 /// Reads an observation file: `format` is "csv", "mrclam" (a directory), "g2o" or "mcap" (a
 /// ROS 2 bag or Foxglove/qrm log; `topic` is one topic or a list, default: every detection
 /// topic, else the one LaserScan topic). Returns (scans, truth): each scan a dict
@@ -421,35 +452,11 @@ pub(crate) fn read_observations<'py>(
             "format must be csv, mrclam, g2o or mcap, got {f:?}"
         ))
     })??;
-    let mut scans = Vec::with_capacity(data.scans.len());
-    for s in &data.scans {
-        let d = PyDict::new(py);
-        d.set_item("t", s.t)?;
-        d.set_item("robot", s.robot)?;
-        d.set_item(
-            "ids",
-            s.observations
-                .iter()
-                .map(|o| i64::from(o.id.0))
-                .collect::<Vec<_>>()
-                .into_pyarray(py),
-        )?;
-        let xy: Vec<Vec<f64>> = s.observations.iter().map(|o| o.mean.to_vec()).collect();
-        let cov: Vec<Vec<f64>> = s
-            .observations
-            .iter()
-            .map(|o| vec![o.cov[0][0], o.cov[0][1], o.cov[1][1]])
-            .collect();
-        d.set_item(
-            "xy",
-            PyArray2::from_vec2(py, &xy).map_err(|e| invalid(e.to_string()))?,
-        )?;
-        d.set_item(
-            "cov",
-            PyArray2::from_vec2(py, &cov).map_err(|e| invalid(e.to_string()))?,
-        )?;
-        scans.push(d);
-    }
+    let scans = data
+        .scans
+        .iter()
+        .map(|s| scan_dict(py, s))
+        .collect::<PyResult<Vec<_>>>()?;
     let truth = data.truth.map(|t| {
         t.positions
             .iter()

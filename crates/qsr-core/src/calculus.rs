@@ -1,7 +1,6 @@
 //! [`Calculus`]: a validated, compiled calculus with classification and lazily computed
 //! derived structure (neighbours, permutations, composition, merges).
 
-use std::fmt;
 use std::sync::{Arc, OnceLock};
 
 use nalgebra::Point2;
@@ -10,33 +9,12 @@ use crate::compose::{ComposeOptions, ComposeTable};
 use crate::coverage::{Features, StatePool, state_pools};
 use crate::error::{QsrError, Result, spec_error};
 use crate::frame::{AnyFrame, ExtendedFrame, FrameKind, OrientedFrame, Segment, TernaryFrame};
-use crate::merge::MergeMap;
 use crate::neighbours::NeighbourGraph;
 use crate::partition::{BLOCK, ConstraintPartition, Partition, RasterPartition, complete_table};
 use crate::permute::{Permutation, PermutationTable};
+use crate::sampled::{DERIVED_SEED, Sampled};
 use crate::spec::{CalculusSpec, OutsideRule, RasterSpec, format_vector, pattern_table};
-
-/// Index of a state within its calculus (`0..n_states`), in spec order.
-#[derive(
-    Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, serde::Serialize, serde::Deserialize,
-)]
-#[serde(transparent)]
-pub struct StateId(pub u16);
-
-impl StateId {
-    /// The index as `usize`.
-    #[inline(always)]
-    #[must_use]
-    pub fn index(self) -> usize {
-        usize::from(self.0)
-    }
-}
-
-impl fmt::Display for StateId {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "{}", self.0)
-    }
-}
+pub use crate::state::StateId;
 
 /// Probe points used to validate a constraint spec (sign vectors that occur in the plane).
 const VALIDATION_PROBES: usize = 200_000;
@@ -44,8 +22,6 @@ const VALIDATION_PROBES: usize = 200_000;
 pub(crate) const DERIVED_PROBES: usize = 400_000;
 /// Points kept per state for composition.
 pub(crate) const POOL_CAPACITY: usize = 8192;
-/// Seed of every internal sampler: derived structure is a deterministic function of the spec.
-pub(crate) const DERIVED_SEED: u64 = 0x5152_4d5f_7173_7231;
 
 #[derive(Debug, Default)]
 struct DerivedCache {
@@ -490,15 +466,6 @@ impl Calculus {
         Ok(ComposeTable::compute(self, options))
     }
 
-    /// The map from this (finer) calculus's states to `coarse`'s.
-    ///
-    /// # Errors
-    /// [`QsrError::Arity`] when the frames differ, [`QsrError::NotARefinement`] when a state
-    /// of `self` meets two states of `coarse`.
-    pub fn merge_map(&self, coarse: &Calculus) -> Result<MergeMap> {
-        MergeMap::compute(self, coarse)
-    }
-
     /// This calculus as a label raster over `window` (`[x_min, x_max, y_min, y_max]`) with
     /// `nx × ny` cells (each labelled by its centre) and `outside` beyond it: a learned
     /// calculus in the form SERGE produces.
@@ -710,4 +677,25 @@ fn compile_raster(spec: &CalculusSpec, r: &RasterSpec) -> Result<RasterPartition
         ));
     }
     Ok(RasterPartition::new(r, outside))
+}
+
+impl Sampled for Calculus {
+    fn n_states(&self) -> usize {
+        Calculus::n_states(self)
+    }
+    fn partition(&self) -> &Partition {
+        Calculus::partition(self)
+    }
+    fn classify_normalised(&self, p: &Point2<f64>) -> StateId {
+        Calculus::classify_normalised(self, p)
+    }
+    fn probes(&self) -> &[Point2<f64>] {
+        Calculus::probes(self)
+    }
+    fn pools(&self) -> &[StatePool] {
+        Calculus::pools(self)
+    }
+    fn features(&self) -> &Features {
+        Calculus::features(self)
+    }
 }

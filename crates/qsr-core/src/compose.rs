@@ -31,8 +31,9 @@ use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 
-use crate::calculus::{Calculus, DERIVED_SEED, StateId};
 use crate::permute::coincident;
+use crate::sampled::{DERIVED_SEED, Sampled};
+use crate::state::StateId;
 
 /// Sampling options for [`ComposeTable`] and [`crate::PermutationTable`].
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -69,6 +70,45 @@ impl ComposeOptions {
     }
 }
 
+/// The states whose flag is set, in id order.
+fn states_hit(hit: &[bool]) -> Vec<StateId> {
+    hit.iter()
+        .enumerate()
+        .filter(|(_, h)| **h)
+        .map(|(i, _)| StateId(i as u16))
+        .collect()
+}
+
+/// One configuration placed: C in the AB frame, P the position of D in the BC frame, whether
+/// exact (on the lattice) → the states `(r, s, t)` of `{AB:C}`, `{BC:D}`, `{AB:D}`, or
+/// `None` for a configuration skipped (coincident points, near a boundary).
+trait Place: Fn(Point2<f64>, Point2<f64>, bool) -> Option<(usize, usize, usize)> {}
+
+impl<F: Fn(Point2<f64>, Point2<f64>, bool) -> Option<(usize, usize, usize)>> Place for F {}
+
+/// What `place` gives for C and P on the dyadic lattice `(i/8, j/8)`, `i` in −24..=24 and
+/// `j` in −16..=24, each C's placements sorted and deduplicated: C and P on it make every
+/// product and sum of the placement exact.
+fn exact_placements(place: &(dyn Place + Sync)) -> Vec<Vec<(usize, usize, usize)>> {
+    let lattice: Vec<Point2<f64>> = (-24..=24)
+        .flat_map(|i| (-16..=24).map(move |j| Point2::new(f64::from(i) / 8.0, f64::from(j) / 8.0)))
+        .collect();
+    lattice
+        .par_iter()
+        .map(|c| {
+            let mut found = Vec::new();
+            for p in &lattice {
+                if let Some(rst) = place(*c, *p, true) {
+                    found.push(rst);
+                }
+            }
+            found.sort_unstable();
+            found.dedup();
+            found
+        })
+        .collect()
+}
+
 /// `table[r][s]` = the states `{A,B:D}` can take given `{A,B:C} = r` and `{B,C:D} = s`.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct ComposeTable {
@@ -76,7 +116,7 @@ pub struct ComposeTable {
 }
 
 impl ComposeTable {
-    pub(crate) fn compute(calculus: &Calculus, options: &ComposeOptions) -> Self {
+    pub(crate) fn compute(calculus: &impl Sampled, options: &ComposeOptions) -> Self {
         let n = calculus.n_states();
         let pools = calculus.pools();
         let partition = calculus.partition();
@@ -135,41 +175,13 @@ impl ComposeTable {
         // Exact configurations on boundaries: dyadic C and P (multiples of 1/8) make every
         // product and sum above exact, so points exactly on lines, on the unit circles' dyadic
         // points and on vertices count with the spec's zero-set rule.
-        let lattice: Vec<Point2<f64>> = (-24..=24)
-            .flat_map(|i| {
-                (-16..=24).map(move |j| Point2::new(f64::from(i) / 8.0, f64::from(j) / 8.0))
-            })
-            .collect();
-        let exact = lattice
-            .par_iter()
-            .map(|c| {
-                let mut found = Vec::new();
-                for p in &lattice {
-                    if let Some(rst) = place(*c, *p, true) {
-                        found.push(rst);
-                    }
-                }
-                found.sort_unstable();
-                found.dedup();
-                found
-            })
-            .collect::<Vec<_>>();
+        let exact = exact_placements(&place);
         for (r, s, t) in exact.into_iter().flatten() {
             hits[r][s][t] = true;
         }
         let table = hits
             .into_iter()
-            .map(|row| {
-                row.into_iter()
-                    .map(|hit| {
-                        hit.iter()
-                            .enumerate()
-                            .filter(|(_, h)| **h)
-                            .map(|(i, _)| StateId(i as u16))
-                            .collect()
-                    })
-                    .collect()
-            })
+            .map(|row| row.into_iter().map(|hit| states_hit(&hit)).collect())
             .collect();
         Self { table }
     }

@@ -80,7 +80,9 @@ pub mod progress;
 pub mod reason;
 #[cfg(feature = "svg")]
 mod render;
+mod sampled;
 mod spec;
+mod state;
 pub mod stats;
 pub mod table_text;
 pub mod text_file;

@@ -99,3 +99,14 @@ impl MergeMap {
         (&self.fine, &self.coarse)
     }
 }
+
+impl Calculus {
+    /// The map from this (finer) calculus's states to `coarse`'s.
+    ///
+    /// # Errors
+    /// [`QsrError::Arity`] when the frames differ, [`QsrError::NotARefinement`] when a state
+    /// of `self` meets two states of `coarse`.
+    pub fn merge_map(&self, coarse: &Calculus) -> Result<MergeMap> {
+        MergeMap::compute(self, coarse)
+    }
+}

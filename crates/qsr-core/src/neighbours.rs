@@ -17,8 +17,9 @@
 use petgraph::graph::{NodeIndex, UnGraph};
 use rayon::prelude::*;
 
-use crate::calculus::{Calculus, DERIVED_SEED, StateId};
 use crate::partition::Partition;
+use crate::sampled::{DERIVED_SEED, Sampled};
+use crate::state::StateId;
 
 /// Boundary points probed for constraint calculi.
 const BOUNDARY_PROBES: usize = 60_000;
@@ -31,7 +32,7 @@ pub struct NeighbourGraph {
 }
 
 impl NeighbourGraph {
-    pub(crate) fn compute(calculus: &Calculus) -> Self {
+    pub(crate) fn compute(calculus: &impl Sampled) -> Self {
         let n = calculus.n_states();
         let adjacent = match calculus.partition() {
             Partition::Constraints(_) => ring_adjacency(calculus),
@@ -138,7 +139,7 @@ impl NeighbourGraph {
     }
 }
 
-fn ring_adjacency(calculus: &Calculus) -> Vec<Vec<bool>> {
+fn ring_adjacency(calculus: &impl Sampled) -> Vec<Vec<bool>> {
     let n = calculus.n_states();
     let points = calculus
         .features()
@@ -182,7 +183,7 @@ fn ring_adjacency(calculus: &Calculus) -> Vec<Vec<bool>> {
         )
 }
 
-fn raster_adjacency(calculus: &Calculus) -> Vec<Vec<bool>> {
+fn raster_adjacency(calculus: &impl Sampled) -> Vec<Vec<bool>> {
     let n = calculus.n_states();
     let mut adj = vec![vec![false; n]; n];
     let Partition::Raster(r) = calculus.partition() else {

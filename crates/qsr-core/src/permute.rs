@@ -29,10 +29,11 @@ use std::str::FromStr;
 use nalgebra::Point2;
 use rayon::prelude::*;
 
-use crate::calculus::{Calculus, StateId};
 use crate::error::QsrError;
 use crate::frame::TernaryFrame;
 pub(crate) use crate::frame::coincident;
+use crate::sampled::Sampled;
+use crate::state::StateId;
 
 /// One of the five permutation operations.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -117,7 +118,7 @@ pub struct PermutationTable {
 }
 
 impl PermutationTable {
-    pub(crate) fn compute(calculus: &Calculus, op: Permutation, boundaries: bool) -> Self {
+    pub(crate) fn compute(calculus: &impl Sampled, op: Permutation, boundaries: bool) -> Self {
         let n = calculus.n_states();
         let a = Point2::new(0.0, 0.0);
         let b = Point2::new(0.0, 1.0);

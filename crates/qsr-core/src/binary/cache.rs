@@ -68,7 +68,7 @@ pub(crate) fn load_or_derive(c: &BinaryCalculus, dir: &Path) -> (BinaryTables, C
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => String::new(),
         Err(e) => format!("cannot read {}: {e}", path.display()),
     };
-    let tables = derive::derive_tables(c, TICKS_PER_UNIT);
+    let tables = derive::derive_tables(&c.relations(), TICKS_PER_UNIT);
     match write(c, &tables, &path) {
         Ok(()) if reason.is_empty() => (tables, CacheOutcome::Written(path)),
         Ok(()) => (tables, CacheOutcome::Derived(reason)),
@@ -123,4 +123,30 @@ fn write(c: &BinaryCalculus, t: &BinaryTables, path: &Path) -> std::io::Result<(
     std::fs::rename(&tmp, path).inspect_err(|_| {
         let _ = std::fs::remove_file(&tmp);
     })
+}
+
+impl BinaryCalculus {
+    /// A stable 64-bit hash (FNV-1a) of [`BinaryCalculus::definition`]: the on-disk table
+    /// cache's key, so a changed derivation never reads stale tables.
+    #[must_use]
+    pub fn table_hash(&self) -> u64 {
+        fnv1a(self.definition().as_bytes())
+    }
+
+    /// Loads the tables from `dir` when a file with this calculus's hash is there and
+    /// intact, else derives them and writes the file (atomically). A cache that cannot be
+    /// written is not an error: the tables are kept in memory and the outcome says why.
+    ///
+    /// # Errors
+    /// As [`BinaryCalculus::compose_table`] when the table is too large to derive.
+    pub fn load_or_derive_tables(&self, dir: &Path) -> crate::Result<CacheOutcome> {
+        if self.derived.compose.get().is_some() {
+            return Ok(CacheOutcome::InMemory);
+        }
+        self.check_compose()?;
+        let (tables, outcome) = load_or_derive(self, dir);
+        let _ = self.derived.converse.set(tables.converse);
+        let _ = self.derived.compose.set(tables.compose);
+        Ok(outcome)
+    }
 }

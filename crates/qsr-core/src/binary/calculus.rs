@@ -2,14 +2,14 @@
 //! classification, and its derived tables.
 
 use std::f64::consts::PI;
-use std::path::Path;
 use std::sync::{Arc, Mutex, OnceLock};
 
 use nalgebra::Point2;
 
-use super::cache::{self, CacheOutcome};
 use super::derive::{self, ConverseTable};
 use super::direction::{DirectionPartition, TICKS_PER_UNIT};
+pub use super::relations::BinaryFamily;
+use super::relations::Relations;
 use crate::calculus::StateId;
 use crate::compose::ComposeTable;
 use crate::error::{QsrError, Result};
@@ -33,20 +33,6 @@ pub const BINARY_NAMES: [&str; 4] = ["opra-1", "opra-2", "opra-3", "opra-4"];
 /// Largest STAR granularity (as the spec family `star-m`).
 pub const MAX_STAR_M: usize = 32;
 
-/// Which published family a binary calculus belongs to.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-pub enum BinaryFamily {
-    /// Oriented Point Relation Algebra (Moratz 2006; SparQ `opra-m`, GQR `opra1`…): two
-    /// oriented points, each one's own heading cutting the plane into `4m` sectors. Relation
-    /// `i_j`: the other point in sector `i` of this one, this one in sector `j` of the
-    /// other's; `s_k`: same position, the other's heading in sector `k`.
-    Opra,
-    /// STAR (Renz & Mitra 2004) as SparQ's revised star calculus: the direction from one
-    /// point to the other in `m` half-open sectors about a reference direction *shared by all
-    /// points*; `eq` for the same position.
-    Star,
-}
-
 /// A binary calculus over points: relations, classification and derived tables (converse,
 /// composition `{A:B} ∘ {B:C} → {A:C}`, conceptual neighbours), all computed exactly by
 /// angle arithmetic (see [`crate::binary`]).
@@ -69,13 +55,13 @@ pub struct BinaryCalculus {
     family: BinaryFamily,
     partition: DirectionPartition,
     labels: Vec<String>,
-    derived: Arc<Derived>,
+    pub(super) derived: Arc<Derived>,
 }
 
 #[derive(Debug, Default)]
-struct Derived {
-    converse: OnceLock<ConverseTable>,
-    compose: OnceLock<ComposeTable>,
+pub(super) struct Derived {
+    pub(super) converse: OnceLock<ConverseTable>,
+    pub(super) compose: OnceLock<ComposeTable>,
     neighbours: OnceLock<NeighbourGraph>,
 }
 
@@ -263,36 +249,12 @@ impl BinaryCalculus {
         (0..self.labels.len()).map(|i| StateId(u16::try_from(i).unwrap_or(u16::MAX)))
     }
 
-    /// The relation of the distinct-position configuration where the direction from X to Y
-    /// is `dir` ticks and the headings are `hx`, `hy` (ticks, `per_unit` ticks per unit).
-    pub(crate) fn relation_distinct(
-        &self,
-        dir: usize,
-        hx: usize,
-        hy: usize,
-        per_unit: usize,
-    ) -> usize {
-        let turn = 2 * self.partition.m() * per_unit;
-        let half = turn / 2;
-        let sec = |t: usize| self.partition.sector_of_tick(t, per_unit);
-        match self.family {
-            BinaryFamily::Opra => {
-                let n = 4 * self.partition.m();
-                sec(dir + turn - hx) * n + sec(dir + half + 2 * turn - hy)
-            }
-            BinaryFamily::Star => sec(dir + turn - hx),
-        }
-    }
-
-    /// The relation of two points at the same position with headings `hx`, `hy` (ticks).
-    pub(crate) fn relation_same(&self, hx: usize, hy: usize, per_unit: usize) -> usize {
-        let turn = 2 * self.partition.m() * per_unit;
-        match self.family {
-            BinaryFamily::Opra => {
-                let n = 4 * self.partition.m();
-                n * n + self.partition.sector_of_tick(hy + turn - hx, per_unit)
-            }
-            BinaryFamily::Star => self.partition.m(),
+    /// The relation arithmetic the derivations need, below the calculus.
+    pub(crate) fn relations(&self) -> Relations {
+        Relations {
+            family: self.family,
+            partition: self.partition,
+            n_states: self.n_states(),
         }
     }
 
@@ -380,13 +342,6 @@ impl BinaryCalculus {
         )
     }
 
-    /// A stable 64-bit hash (FNV-1a) of [`BinaryCalculus::definition`]: the on-disk table
-    /// cache's key, so a changed derivation never reads stale tables.
-    #[must_use]
-    pub fn table_hash(&self) -> u64 {
-        cache::fnv1a(self.definition().as_bytes())
-    }
-
     /// What deriving the composition table takes (checked by [`BinaryCalculus::compose_table`]).
     #[must_use]
     pub fn compose_cost(&self) -> DerivationCost {
@@ -397,11 +352,11 @@ impl BinaryCalculus {
         let bytes = n * n * (8 * words * tables + 24);
         DerivationCost {
             bytes,
-            steps: derive::compose_steps(self, TICKS_PER_UNIT),
+            steps: derive::compose_steps(&self.relations(), TICKS_PER_UNIT),
         }
     }
 
-    fn check_compose(&self) -> Result<()> {
+    pub(super) fn check_compose(&self) -> Result<()> {
         let cost = self.compose_cost();
         if cost.bytes > MAX_TABLE_BYTES || cost.steps > MAX_DERIVATION_STEPS {
             return Err(QsrError::TooLarge {
@@ -425,7 +380,7 @@ impl BinaryCalculus {
     pub fn converse(&self) -> &ConverseTable {
         self.derived
             .converse
-            .get_or_init(|| derive::derive_converse(self, TICKS_PER_UNIT))
+            .get_or_init(|| derive::derive_converse(&self.relations(), TICKS_PER_UNIT))
     }
 
     /// The composition table `{A:B} ∘ {B:C} → {A:C}` (derived on first use, then cached).
@@ -441,31 +396,14 @@ impl BinaryCalculus {
         Ok(self
             .derived
             .compose
-            .get_or_init(|| derive::derive_compose(self, TICKS_PER_UNIT)))
-    }
-
-    /// Loads the tables from `dir` when a file with this calculus's hash is there and
-    /// intact, else derives them and writes the file (atomically). A cache that cannot be
-    /// written is not an error: the tables are kept in memory and the outcome says why.
-    ///
-    /// # Errors
-    /// As [`BinaryCalculus::compose_table`] when the table is too large to derive.
-    pub fn load_or_derive_tables(&self, dir: &Path) -> Result<CacheOutcome> {
-        if self.derived.compose.get().is_some() {
-            return Ok(CacheOutcome::InMemory);
-        }
-        self.check_compose()?;
-        let (tables, outcome) = cache::load_or_derive(self, dir);
-        let _ = self.derived.converse.set(tables.converse);
-        let _ = self.derived.compose.set(tables.compose);
-        Ok(outcome)
+            .get_or_init(|| derive::derive_compose(&self.relations(), TICKS_PER_UNIT)))
     }
 
     /// Derives the tables on a grid of `per_unit` ticks per unit (not cached): tests use it
     /// to check that [`TICKS_PER_UNIT`] is fine enough.
     #[must_use]
     pub fn derive_tables_with(&self, per_unit: usize) -> (ConverseTable, ComposeTable) {
-        let t = derive::derive_tables(self, per_unit.max(1));
+        let t = derive::derive_tables(&self.relations(), per_unit.max(1));
         (t.converse, t.compose)
     }
 
@@ -496,7 +434,7 @@ impl BinaryCalculus {
         Ok(self
             .derived
             .neighbours
-            .get_or_init(|| derive::derive_neighbours(self, TICKS_PER_UNIT)))
+            .get_or_init(|| derive::derive_neighbours(&self.relations(), TICKS_PER_UNIT)))
     }
 }
 

@@ -4,7 +4,7 @@
 
 use rayon::prelude::*;
 
-use super::calculus::BinaryCalculus;
+use super::relations::Relations;
 use crate::calculus::StateId;
 use crate::compose::ComposeTable;
 use crate::neighbours::NeighbourGraph;
@@ -152,7 +152,7 @@ fn triangles(turn: usize) -> Vec<(usize, usize)> {
 pub(crate) const PARTS: usize = 4;
 
 /// Converse and composition of `c` on a grid of `per_unit` ticks per unit.
-pub(crate) fn derive_tables(c: &BinaryCalculus, per_unit: usize) -> BinaryTables {
+pub(crate) fn derive_tables(c: &Relations, per_unit: usize) -> BinaryTables {
     BinaryTables {
         converse: derive_converse(c, per_unit),
         compose: derive_compose(c, per_unit),
@@ -161,7 +161,7 @@ pub(crate) fn derive_tables(c: &BinaryCalculus, per_unit: usize) -> BinaryTables
 
 /// Grid steps of the composition derivation (for the cost estimate): directions of A→B ×
 /// triangles × B's and C's headings, plus the coincidences.
-pub(crate) fn compose_steps(c: &BinaryCalculus, per_unit: usize) -> u64 {
+pub(crate) fn compose_steps(c: &Relations, per_unit: usize) -> u64 {
     let turn = 2 * c.partition().m() * per_unit;
     let headings = if c.is_oriented() { turn as u64 } else { 1 };
     let half = (turn / 2) as u64;
@@ -174,7 +174,7 @@ pub(crate) fn compose_steps(c: &BinaryCalculus, per_unit: usize) -> u64 {
 ///
 /// Headings: A's is 0 (rotation invariance); B's and C's run over the grid for OPRA and are
 /// 0 for STAR (its reference direction is shared).
-pub(crate) fn derive_compose(c: &BinaryCalculus, per_unit: usize) -> ComposeTable {
+pub(crate) fn derive_compose(c: &Relations, per_unit: usize) -> ComposeTable {
     let n = c.n_states();
     let turn = 2 * c.partition().m() * per_unit;
     let half = turn / 2;
@@ -228,7 +228,7 @@ pub(crate) fn derive_compose(c: &BinaryCalculus, per_unit: usize) -> ComposeTabl
 }
 
 /// The converse of `c`: every direction and heading of B on the grid, and coincidence.
-pub(crate) fn derive_converse(c: &BinaryCalculus, per_unit: usize) -> ConverseTable {
+pub(crate) fn derive_converse(c: &Relations, per_unit: usize) -> ConverseTable {
     let n = c.n_states();
     let turn = 2 * c.partition().m() * per_unit;
     let half = turn / 2;
@@ -257,7 +257,7 @@ pub(crate) fn derive_converse(c: &BinaryCalculus, per_unit: usize) -> ConverseTa
 /// between relations whose closures meet. Moving Y onto X keeps `a`, `b` and leaves the
 /// headings differing by `a − b + π`: the same-position relations at that difference (and a
 /// step either side when the difference ranges over an open interval) are neighbours.
-pub(crate) fn derive_neighbours(c: &BinaryCalculus, per_unit: usize) -> NeighbourGraph {
+pub(crate) fn derive_neighbours(c: &Relations, per_unit: usize) -> NeighbourGraph {
     let n = c.n_states();
     let turn = 2 * c.partition().m() * per_unit;
     let half = turn / 2;

@@ -43,6 +43,7 @@ mod derive;
 mod direction;
 mod network;
 mod picture;
+mod relations;
 
 pub use cache::{CacheOutcome, cache_path};
 pub use calculus::{
