@@ -152,7 +152,7 @@ fn map_into(
     let pb = crate::progress::Bar::new(0, label);
     let mut mapped = job.map(input, data, &pb)?;
     pb.finish_and_clear();
-    if let Some(fit) = mapped.temper_fit() {
+    if let Some(fit) = &mapped.temper_fit {
         eprintln!(
             "{label}: τ = {:.3} chosen from held-out frames (log score {:.4} vs {:.4} at τ = 1)",
             fit.chosen,

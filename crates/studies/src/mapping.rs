@@ -173,6 +173,8 @@ pub struct Mapped {
     pub map: Pqrm,
     /// What was mapped, with what, and how well (scored when the recording has truth).
     pub summary: Map<String, Value>,
+    /// The τ chosen from the recording, when `auto` chose one (also in the summary).
+    pub temper_fit: Option<TemperFit>,
     format: MapFormatChoice,
 }
 
@@ -345,6 +347,7 @@ impl MapJob {
         Ok(Mapped {
             map,
             summary,
+            temper_fit,
             format: self.map_format,
         })
     }
@@ -384,14 +387,6 @@ impl Mapped {
         self.summary
             .insert("save_seconds".into(), json!(saving.elapsed().as_secs_f64()));
         Ok(())
-    }
-
-    /// The τ chosen from the recording, if `auto` chose one.
-    #[must_use]
-    pub fn temper_fit(&self) -> Option<TemperFit> {
-        self.summary
-            .get("temper_fit")
-            .and_then(|v| serde_json::from_value(v.clone()).ok())
     }
 }
 
