@@ -38,30 +38,10 @@ impl TableFormat {
     }
 }
 
-/// Where derived tables are cached: `QRM_CACHE_DIR` (empty: no cache), else
-/// `$XDG_CACHE_HOME/qrm`, else `~/.cache/qrm`.
-fn cache_dir() -> Option<PathBuf> {
-    if let Some(dir) = std::env::var_os("QRM_CACHE_DIR") {
-        return (!dir.is_empty()).then(|| PathBuf::from(dir));
-    }
-    if let Some(x) = std::env::var_os("XDG_CACHE_HOME").filter(|x| !x.is_empty()) {
-        return Some(PathBuf::from(x).join("qrm"));
-    }
-    std::env::var_os("HOME")
-        .filter(|h| !h.is_empty())
-        .map(|h| PathBuf::from(h).join(".cache").join("qrm"))
-}
-
 /// Loads or derives the tables, saying on stderr where they came from and how long it took.
 fn tables(c: &BinaryCalculus) -> Result<()> {
     let start = Instant::now();
-    let outcome = match cache_dir() {
-        Some(dir) => c.load_or_derive_tables(&dir)?,
-        None => {
-            c.compose_table()?;
-            CacheOutcome::Derived("no cache directory".into())
-        }
-    };
+    let outcome = c.load_or_derive_cached()?;
     let secs = start.elapsed().as_secs_f64();
     match outcome {
         CacheOutcome::InMemory => {}

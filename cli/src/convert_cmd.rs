@@ -3,7 +3,7 @@
 
 use std::path::PathBuf;
 
-use anyhow::{Context, Result, bail};
+use anyhow::{Result, bail};
 use pqrm::loaders::read_truth_csv;
 
 use crate::flags::InputFormat;
@@ -40,27 +40,11 @@ pub fn run(a: ConvertArgs) -> Result<()> {
     if let Some(t) = &a.truth {
         data.truth = Some(read_truth_csv(t)?);
     }
-    if a.out.is_dir() {
-        bail!("--out {} is a directory, not an MCAP file", a.out.display());
-    }
     // Written beside the target and renamed when finished: a failure or Ctrl-C never leaves a
     // half-written file under the final name.
-    let dir = match a.out.parent() {
-        Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
-        _ => PathBuf::from("."),
-    };
-    std::fs::create_dir_all(&dir).with_context(|| format!("creating {}", dir.display()))?;
-    let stage = crate::output::Staging::new(&dir.join(format!(
-        ".convert-{}",
-        a.out
-            .file_name()
-            .map_or_else(String::new, |n| n.to_string_lossy().into_owned())
-    )))?;
-    let tmp = stage.path().join("run.mcap");
-    qrm_log::write_dataset(&tmp, &data, &a.input.display().to_string())?;
-    std::fs::rename(&tmp, &a.out)
-        .with_context(|| format!("moving the log to {}", a.out.display()))?;
-    drop(stage);
+    let file = qrm_files::StagedFile::new(&a.out)?;
+    qrm_log::write_dataset(file.path(), &data, &a.input.display().to_string())?;
+    file.commit()?;
     let robots: std::collections::BTreeSet<u32> = data.scans.iter().map(|s| s.robot).collect();
     outln!(
         "{}: {} scans of {} robot(s){}; wrote {}",

@@ -1,7 +1,7 @@
 //! Writing result files: whole or not at all (the writers are `qrm_files`'s, shared with the
 //! Python wheel); here, what Ctrl-C does to an unfinished output.
 
-pub use qrm_files::{CsvTable, Staging, write_atomic, write_picture};
+pub use qrm_files::{Staging, write_atomic};
 
 /// Ctrl-C: say so, remove the staging directories of unfinished outputs, exit 130 (the shell
 /// convention for SIGINT) — within a second, whatever the computation is doing.

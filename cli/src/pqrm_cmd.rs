@@ -5,21 +5,20 @@ use std::io::{BufRead, Read, Write};
 use std::path::Path;
 
 use anyhow::{Context, Result, ensure};
-use pqrm::loaders::{RangeBearingNoise, read_mrclam, read_truth_csv};
 use pqrm::study::ObservationQuery;
 use pqrm::temper::TemperChoice;
-use pqrm::{Orderings, Pqrm, PqrmConfig, evaluate};
+use pqrm::{Orderings, PqrmConfig};
 use qsr_core::Calculus;
 use serde_json::json;
+use studies::calibration::Calibration;
 use studies::mapping::{MapJob, OrderingsChoice};
 use studies::pqrm::monte_carlo::MonteCarlo;
-use studies::pqrm::real_data::{NoiseSource, RealData, RealDataConfig};
+use studies::pqrm::real_data::{RealData, RealDataConfig};
 
 use crate::args::{
     CalibrateArgs, MapArgs, MergeArgs, OrderingsArg, PqrmCmd, RealArgs, StudyArgs, TruthDataset,
 };
-use crate::flags::{InputFormat, NoiseMode};
-use crate::output::{Staging, write_atomic, write_picture};
+use crate::output::{Staging, write_atomic};
 
 /// Runs one `pqrm` subcommand.
 pub fn run(cmd: PqrmCmd) -> Result<()> {
@@ -171,85 +170,19 @@ fn map_into(
 
 /// `qrm pqrm calibrate`.
 fn calibrate(a: CalibrateArgs) -> Result<()> {
-    let data = studies::recording::read(a.format.into(), &a.input, RangeBearingNoise::MRCLAM)?;
-    let fit = pqrm::calibrate::fit_noise(&data)
-        .with_context(|| format!("fitting the noise of {}", a.input.display()))?;
-    let z: Vec<f64> = pqrm::calibrate::residuals(&data, &fit)
-        .iter()
-        .filter(|r| r.sigma > 0.0)
-        .map(|r| (r.residual / r.sigma).clamp(-8.0, 8.0))
-        .collect();
+    let calibration = Calibration::of_recording(a.format.into(), &a.input)?;
     let stage = Staging::new(&a.out)?;
-    let out_dir = stage.path().to_path_buf();
-    let summary = json!({
-        "input": a.input.display().to_string(),
-        "format": a.format.as_str(),
-        "fit": fit,
-        "method": "spread of the distance between landmarks seen in one frame about its median over frames; IRLS on |z| <= 3; outlier rate = share beyond 3 sigma minus 0.27 %",
-        // Only a range-bearing format takes the fitted σs; the others carry their own
-        // covariances, which this fit is a check of.
-        "use": if a.format == InputFormat::Mrclam {
-            format!("qrm map --format mrclam --input {} --noise auto  (or --sigma-range {:.4} --sigma-bearing {:.5}; heavy tails: --sensor outliers:{:.3},{:.0})",
-                a.input.display(), fit.sigma_range, fit.sigma_bearing, fit.outlier_rate, fit.max_range.ceil())
-        } else {
-            format!("{} files carry their own covariances: compare them with this fit; for heavy tails: qrm map --sensor outliers:{:.3},{:.0}",
-                a.format.as_str(), fit.outlier_rate, fit.max_range.ceil())
-        },
-    });
-    write_atomic(
-        &out_dir.join("calibration.json"),
-        serde_json::to_string_pretty(&summary)?.as_bytes(),
-    )?;
-    let edges: Vec<f64> = (0..=32).map(|i| -8.0 + 0.5 * f64::from(i)).collect();
-    write_picture(
-        &out_dir.join("residuals"),
-        &qrm_plot::histogram(
-            &format!(
-                "residual / fitted σ (N(0,1) if the model is right; {:.1} % beyond ±3)",
-                100.0 * z.iter().filter(|v| v.abs() > 3.0).count() as f64 / z.len().max(1) as f64
-            ),
-            "normalised residual of a pairwise distance (clamped to ±8)",
-            &edges,
-            &[("residuals".to_owned(), z)],
-        )?,
-    )?;
+    qrm_files::write_products(stage.path(), &calibration.products()?)?;
     // Committed before printing: a closed pipe must not lose the result.
     stage.commit()?;
-    outln!("{}", serde_json::to_string_pretty(&summary)?)?;
+    outln!("{}", serde_json::to_string_pretty(&calibration.summary())?)?;
     Ok(())
 }
 
 /// `qrm pqrm merge`.
 fn merge(a: MergeArgs) -> Result<()> {
-    let maps = a
-        .maps
-        .iter()
-        .map(|p| Pqrm::load(p).with_context(|| format!("loading the map {}", p.display())))
-        .collect::<Result<Vec<_>>>()?;
-    let truth = match &a.truth {
-        Some(t) if t.is_dir() => Some(
-            read_mrclam(t, RangeBearingNoise::MRCLAM)?
-                .truth
-                .with_context(|| format!("{} has no surveyed landmarks", t.display()))?,
-        ),
-        Some(t) => Some(read_truth_csv(t)?),
-        None => None,
-    };
-    let merged =
-        pqrm::robots::merge_maps(&maps).with_context(|| format!("merging {} maps", maps.len()))?;
-    let mut summary = json!({
-        "calculus": merged.calculus().name(),
-        "maps": a.maps.iter().map(|p| p.display().to_string()).collect::<Vec<_>>(),
-        "sets_per_map": maps.iter().map(Pqrm::len).collect::<Vec<_>>(),
-        "n_sets": merged.len(),
-        "mean_entropy": merged.mean_entropy(),
-    });
-    if let Some(truth) = &truth
-        && !merged.is_empty()
-    {
-        let obj = summary.as_object_mut().context("summary is an object")?;
-        studies::mapping::score_into(obj, &evaluate(&merged, truth)?);
-    }
+    let (merged, summary) = studies::mapping::merge_saved(&a.maps, a.truth.as_deref())
+        .with_context(|| format!("merging {} maps", a.maps.len()))?;
     // binary for a `.pqrm` path, JSON otherwise; atomic either way
     merged
         .save(&a.out)
@@ -293,24 +226,6 @@ fn real(a: RealArgs) -> Result<()> {
     config.gate_sigmas = a.gate.then_some(RealDataConfig::GATE_SIGMAS);
     config.sensor = pqrm::sensor::SensorModel::parse(&a.sensor).context("--sensor")?;
     config.temper = TemperChoice::parse(&a.temper).context("--temper")?;
-    let given = a.noise.sigma_range.is_some() || a.noise.sigma_bearing.is_some();
-    config.noise = match a.noise.mode {
-        Some(NoiseMode::Auto) => {
-            ensure!(
-                !given,
-                "--noise auto fits σ_r and σ_b; drop --sigma-range/--sigma-bearing or say --noise fixed"
-            );
-            NoiseSource::Fitted
-        }
-        Some(NoiseMode::Fixed) => NoiseSource::Given,
-        None if given => NoiseSource::Given,
-        None => NoiseSource::Fitted,
-    };
-    if let Some(s) = a.noise.sigma_range {
-        config.sigma_range = s;
-    }
-    if let Some(s) = a.noise.sigma_bearing {
-        config.sigma_bearing = s;
-    }
+    config.request_noise(&a.noise.request())?;
     crate::study_cmd::run_study::<RealData>(&config, &a.out)
 }

@@ -1,6 +1,5 @@
 //! `qrm reason ...`: thin front end over `qsr_core::reason` (closure, scenarios).
 
-use std::io::Read;
 use std::path::PathBuf;
 
 use anyhow::{Context, Result, bail};
@@ -77,8 +76,8 @@ pub struct InferArgs {
     pub out: PathBuf,
     /// Ordered sets to infer, `A,B,D` (repeatable; default: every unordered set of the map's
     /// landmarks never observed, in increasing-id order).
-    #[arg(long = "set", value_parser = parse_set)]
-    pub sets: Vec<[u32; 3]>,
+    #[arg(long = "set")]
+    pub sets: Vec<LandmarkSet>,
     /// How path predictions are combined.
     #[arg(long, value_enum, default_value_t = FusionArg::Fitted)]
     pub fusion: FusionArg,
@@ -134,18 +133,6 @@ impl From<FusionArg> for Fusion {
             FusionArg::Product => Fusion::Product,
             FusionArg::Fitted => Fusion::Fitted,
         }
-    }
-}
-
-fn parse_set(s: &str) -> std::result::Result<[u32; 3], String> {
-    let ids: Vec<u32> = s
-        .split(',')
-        .map(|t| t.trim().parse::<u32>().map_err(|e| format!("`{t}`: {e}")))
-        .collect::<std::result::Result<_, _>>()?;
-    match ids.as_slice() {
-        [a, b, d] if a != b && b != d && a != d => Ok([*a, *b, *d]),
-        [_, _, _] => Err(format!("`{s}` repeats a landmark")),
-        _ => Err(format!("`{s}`: expected three landmark ids A,B,D")),
     }
 }
 
@@ -206,15 +193,11 @@ fn read_network(args: &NetworkArgs) -> Result<(String, String, qsr_core::reason:
             qsr_core::text_file::read_text(path, max)
                 .with_context(|| format!("reading {}", path.display()))?,
         ),
-        None => {
-            let mut s = String::new();
-            std::io::stdin()
-                .take(max + 1)
-                .read_to_string(&mut s)
-                .context("reading the network from stdin")?;
-            anyhow::ensure!(s.len() as u64 <= max, "stdin: more than {max} bytes");
-            ("stdin".to_owned(), s)
-        }
+        None => (
+            "stdin".to_owned(),
+            qsr_core::text_file::read_stream(std::io::stdin(), max)
+                .context("reading the network from stdin")?,
+        ),
     };
     let format = match args.format {
         Some(f) => f.into(),
@@ -358,12 +341,7 @@ fn infer(args: &InferArgs) -> Result<()> {
     let inferences = if args.sets.is_empty() {
         inferrer.infer_unseen()
     } else {
-        let sets: Vec<LandmarkSet> = args
-            .sets
-            .iter()
-            .map(|[a, b, d]| LandmarkSet::new(*a, *b, *d))
-            .collect();
-        inferrer.infer_sets(&sets)?
+        inferrer.infer_sets(&args.sets)?
     };
     let report = InferenceReport::new(map.calculus(), &options, inferrer.alpha(), &inferences);
     write_atomic(&args.out, serde_json::to_string_pretty(&report)?.as_bytes())?;

@@ -1,20 +1,18 @@
 //! `qrm serge ...`: salient region maps (thesis chapter 3).
 
-use std::path::{Path, PathBuf};
-use std::time::Instant;
+use std::path::PathBuf;
 
 use anyhow::{Context, Result, bail};
-use serde_json::json;
-use serge::{BeliefSet, CellMasses, Grid, SalientRegionMap, Serge, SergeParams};
-use studies::serge::SergeStudy;
-use studies::serge::datasets::{DATASETS, DatasetName};
-use studies::serge::learned_calculus::compose_table_json;
-
-use crate::flags::StudyFlags;
-use crate::output::{Staging, write_atomic, write_picture};
-use qrm_plot::{RegionPicture, region_map};
 use serge::learner::CalculusLearner;
 use serge::selection::TripletSelection;
+use serge::{BeliefSet, SergeParams};
+use studies::serge::SergeStudy;
+use studies::serge::calculus_learning::LearnedFromRecording;
+use studies::serge::datasets::{DATASETS, DatasetName};
+use studies::serge::region_map::RegionMapJob;
+
+use crate::flags::StudyFlags;
+use crate::output::Staging;
 
 /// `qrm serge ...`.
 #[derive(Debug, clap::Subcommand)]
@@ -134,74 +132,26 @@ fn window4(v: &[f64]) -> Result<[f64; 4]> {
     }
 }
 
-fn draw_map(stem: &Path, title: &str, map: &SalientRegionMap, points: &[[f64; 2]]) -> Result<()> {
-    let picture = region_map(
-        title,
-        &RegionPicture {
-            window: map.grid.window,
-            nx: map.grid.nx,
-            ny: map.grid.ny,
-            cell_region: &map.cell_region,
-            points,
-            highlight: &[],
-            shade: None,
-            marks: &[],
-            numbers: map.n_regions <= 60,
-        },
-    )?;
-    write_picture(stem, &picture)?;
-    Ok(())
-}
-
 fn run_map(a: RunArgs) -> Result<()> {
     // stage two: validate everything before any work
     let text = qsr_core::text_file::read_text(&a.beliefs, qsr_core::text_file::MAX_INPUT_BYTES)
         .with_context(|| format!("reading {}", a.beliefs.display()))?;
-    let beliefs = BeliefSet::from_json_str(&text, &a.beliefs.display().to_string())?;
-    let grid = match &a.window {
-        Some(w) => Grid::new(window4(w)?, a.grid, a.grid)?,
-        None => Grid::around(&beliefs, a.grid, a.grid)?,
-    };
     let mut params = SergeParams::new(a.mu, a.sigma).seed(a.seed);
     if let Some(t) = a.trials {
         params = params.trials(t);
     }
-    let start = Instant::now();
-    let masses = CellMasses::compute(&beliefs, grid)?;
-    let serge = Serge::new(&masses)?;
-    let map = serge.run(&params)?;
-    let secs = start.elapsed().as_secs_f64();
+    let job = RegionMapJob {
+        beliefs: BeliefSet::from_json_str(&text, &a.beliefs.display().to_string())?,
+        window: a.window.as_deref().map(window4).transpose()?,
+        cells: a.grid,
+        params,
+    };
+    let run = job.run()?;
     // Written into a staging directory, moved into place only when all is done: a
     // failure or Ctrl-C leaves nothing a user could take for a result.
     let stage = Staging::new(&a.out)?;
-    let out_dir = stage.path().to_path_buf();
-    let mut doc = map.to_json();
-    doc["initial_regions"] = json!(serge.n_initial_regions());
-    doc["seconds"] = json!(secs);
-    write_atomic(
-        &out_dir.join("map.json"),
-        serde_json::to_string_pretty(&doc)?.as_bytes(),
-    )?;
-    let means: Vec<[f64; 2]> = beliefs.as_slice().iter().map(serge::Belief::mean).collect();
-    draw_map(
-        &out_dir.join("map"),
-        &format!(
-            "SERGE: {} regions (μ = {}, σ = {}), log saliency {:.3}",
-            map.n_regions, a.mu, a.sigma, map.log_saliency
-        ),
-        &map,
-        &means,
-    )?;
-    outln!(
-        "{} beliefs, {} initial regions → {} regions; log saliency {:.4}; log φ {:.4}; {} trials in {secs:.2} s; wrote {}",
-        beliefs.len(),
-        serge.n_initial_regions(),
-        map.n_regions,
-        map.log_saliency,
-        map.log_phi(),
-        map.trials,
-        a.out.display()
-    )?;
+    qrm_files::write_products(stage.path(), &run.products()?)?;
+    outln!("{}; wrote {}", run.describe(), a.out.display())?;
     stage.commit()?;
     Ok(())
 }
@@ -234,79 +184,12 @@ fn learn(a: LearnArgs) -> Result<()> {
         sigma: a.sigma,
         trials: a.trials,
     };
-    let scans = pqrm::loaders::read_csv(&a.input)?.scans;
-    let start = Instant::now();
-    let (selected, map) = learner
-        .learn(&studies::recording::sightings(&scans))
-        .with_context(|| format!("learning from {}", a.input.display()))?;
-    let (triplets, obs) = (selected.triplets, selected.observations);
-    let calc = map.to_calculus(
-        &a.name,
-        &format!(
-            "learned by SERGE from {} triplets of {} (μ = {}, σ = {})",
-            triplets.len(),
-            a.input.display(),
-            a.mu,
-            a.sigma
-        ),
-    )?;
-    let table = serge::learn::compose_table(&calc, &|| {})?;
+    let learned = LearnedFromRecording::learn(&learner, &a.input, &a.name)?;
     // Written into a staging directory, moved into place only when all is done: a
     // failure or Ctrl-C leaves nothing a user could take for a result.
     let stage = Staging::new(&a.out)?;
-    write_learned(stage.path(), &a.name, &calc, &table, &map, &triplets, &obs)?;
-    outln!(
-        "{} triplets, {} observations → `{}` with {} states, compose {} entries, in {:.1} s; wrote {}",
-        triplets.len(),
-        obs.len(),
-        a.name,
-        calc.n_states(),
-        table.n_entries(),
-        start.elapsed().as_secs_f64(),
-        a.out.display()
-    )?;
+    qrm_files::write_products(stage.path(), &learned.products()?)?;
+    outln!("{}; wrote {}", learned.describe(), a.out.display())?;
     stage.commit()?;
-    Ok(())
-}
-
-/// The learned calculus's files in `dir`: its spec, Algorithm 3's compose table, the SR map
-/// with the triplets it came from, and its picture over the data.
-fn write_learned(
-    dir: &Path,
-    name: &str,
-    calc: &qsr_core::Calculus,
-    table: &qsr_core::ComposeTable,
-    map: &SalientRegionMap,
-    triplets: &[[u32; 3]],
-    obs: &[serge::learn::TripletObservation],
-) -> Result<()> {
-    write_atomic(
-        &dir.join("calculus.json"),
-        calc.spec().to_json_string()?.as_bytes(),
-    )?;
-    let rows = compose_table_json(calc, table);
-    write_atomic(
-        &dir.join("compose.json"),
-        serde_json::to_string(
-            &json!({"states": calc.labels(), "table": rows, "method": "algorithm-3-intervals"}),
-        )?
-        .as_bytes(),
-    )?;
-    let mut doc = map.to_json();
-    doc["triplets"] = json!(triplets);
-    write_atomic(
-        &dir.join("map.json"),
-        serde_json::to_string(&doc)?.as_bytes(),
-    )?;
-    let points: Vec<[f64; 2]> = obs
-        .iter()
-        .filter_map(|o| serge::learn::normalise(o.points[0], o.points[1], o.points[2]))
-        .collect();
-    draw_map(
-        &dir.join("calculus"),
-        &format!("learned calculus `{name}`: {} states", calc.n_states()),
-        map,
-        &points,
-    )?;
     Ok(())
 }

@@ -42,6 +42,23 @@ impl LandmarkSet {
     }
 }
 
+/// `A,B,C`: three distinct landmark ids (a command line's `--set 4,7,9`).
+impl std::str::FromStr for LandmarkSet {
+    type Err = String;
+
+    fn from_str(s: &str) -> std::result::Result<Self, String> {
+        let ids: Vec<u32> = s
+            .split(',')
+            .map(|t| t.trim().parse::<u32>().map_err(|e| format!("`{t}`: {e}")))
+            .collect::<std::result::Result<_, _>>()?;
+        match ids.as_slice() {
+            [a, b, c] if a != b && b != c && a != c => Ok(Self::new(*a, *b, *c)),
+            [_, _, _] => Err(format!("`{s}` repeats a landmark")),
+            _ => Err(format!("`{s}`: expected three landmark ids A,B,C")),
+        }
+    }
+}
+
 /// Which orderings of each observed triplet the map records (thesis §2.3: "m³" vs "C(m,3)").
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "kebab-case")]
@@ -919,4 +936,30 @@ pub fn log_likelihood(counts: &[u32], floor: f64) -> Vec<f64> {
         .iter()
         .map(|&c| ((f64::from(c) + floor) / total).ln())
         .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::LandmarkSet;
+
+    #[test]
+    fn a_set_parses_from_three_distinct_ids_and_nothing_else() {
+        assert_eq!("4, 7,9".parse(), Ok(LandmarkSet::new(4, 7, 9)));
+        assert!(
+            "4,7,4"
+                .parse::<LandmarkSet>()
+                .is_err_and(|e| e.contains("repeats"))
+        );
+        assert!(
+            "4,7"
+                .parse::<LandmarkSet>()
+                .is_err_and(|e| e.contains("three"))
+        );
+        assert!(
+            "4,x,9"
+                .parse::<LandmarkSet>()
+                .is_err_and(|e| e.contains("`x`"))
+        );
+        assert!("4,7,9,1".parse::<LandmarkSet>().is_err());
+    }
 }

@@ -9,9 +9,11 @@
 //! |---|---|
 //! | [`write_atomic`] | one file through a temporary sibling and a rename |
 //! | [`Staging`] | an output directory filled in a hidden sibling and moved into place by [`Staging::commit`] |
+//! | [`StagedFile`] | one file a writer fills by path (an MCAP log), moved into place by [`StagedFile::commit`] |
 //! | [`CsvTable`] | a CSV table through the `csv` crate (labels holding commas stay one field) |
 //! | [`write_picture`] | a figure as `stem.svg` and `stem.png` |
 //! | [`write_run`] | a study run: tables as CSV, figures, attachments, report.md, config.toml |
+//! | [`write_products`] | a job's tables, figures and attachments (`qrm sim`, a calibration, a region map) |
 //!
 //! ## Naming rule
 //! `write_*` writes one thing atomically; a type owns a directory or a table being built.
@@ -39,8 +41,8 @@ mod staging;
 
 pub use atomic::write_atomic;
 pub use csv_table::CsvTable;
-pub use run::{write_picture, write_run};
-pub use staging::{Staging, remove_unfinished};
+pub use run::{write_picture, write_products, write_run};
+pub use staging::{StagedFile, Staging, remove_unfinished};
 
 use std::path::PathBuf;
 

@@ -2,7 +2,7 @@
 
 use std::path::{Path, PathBuf};
 
-use studies::Ran;
+use studies::{Attachment, Figure, Products, Ran, Table};
 
 use crate::{CsvTable, FileError, Result, write_atomic};
 
@@ -27,27 +27,7 @@ pub fn write_picture(stem: &Path, picture: &qrm_plot::Picture) -> Result<Vec<Pat
 /// [`FileError::Io`] naming the file; [`FileError::Plot`] for a figure that cannot be drawn.
 pub fn write_run(dir: &Path, ran: &Ran, timing: Option<(f64, usize)>) -> Result<()> {
     let report = &ran.report;
-    let place = |name: &str| -> Result<PathBuf> {
-        let path = dir.join(name);
-        if let Some(parent) = path.parent() {
-            std::fs::create_dir_all(parent).map_err(FileError::io("creating", parent))?;
-        }
-        Ok(path)
-    };
-    for t in &report.tables {
-        let (header, rows) = t.csv_records();
-        let mut csv = CsvTable::new(header)?;
-        for r in rows {
-            csv.row(r)?;
-        }
-        csv.write(&place(&format!("{}.csv", t.name))?)?;
-    }
-    for f in &report.figures {
-        write_picture(&place(&f.name)?, &qrm_plot::figure(f)?)?;
-    }
-    for a in &report.attachments {
-        write_atomic(&place(&a.name)?, a.bytes())?;
-    }
+    write_parts(dir, &report.tables, &report.figures, &report.attachments)?;
     if let Some((name, text)) = &ran.output_file {
         write_atomic(&dir.join(name), text.as_bytes())?;
     }
@@ -60,5 +40,50 @@ pub fn write_run(dir: &Path, ran: &Ran, timing: Option<(f64, usize)>) -> Result<
         &dir.join("config.toml"),
         studies::config::to_toml(&ran.config)?.as_bytes(),
     )?;
+    Ok(())
+}
+
+/// A job's files in `dir` (`qrm sim`'s run, a calibration, a salient region map): each table
+/// as CSV, each figure (SVG and PNG), each attachment, as [`write_run`] writes a study's.
+///
+/// # Errors
+/// As [`write_run`].
+pub fn write_products(dir: &Path, products: &Products) -> Result<()> {
+    write_parts(
+        dir,
+        &products.tables,
+        &products.figures,
+        &products.attachments,
+    )
+}
+
+/// Tables, figures and attachments in `dir`; a name with a `/` goes into that subdirectory.
+fn write_parts(
+    dir: &Path,
+    tables: &[Table],
+    figures: &[Figure],
+    attachments: &[Attachment],
+) -> Result<()> {
+    let place = |name: &str| -> Result<PathBuf> {
+        let path = dir.join(name);
+        if let Some(parent) = path.parent() {
+            std::fs::create_dir_all(parent).map_err(FileError::io("creating", parent))?;
+        }
+        Ok(path)
+    };
+    for t in tables {
+        let (header, rows) = t.csv_records();
+        let mut csv = CsvTable::new(header)?;
+        for r in rows {
+            csv.row(r)?;
+        }
+        csv.write(&place(&format!("{}.csv", t.name))?)?;
+    }
+    for f in figures {
+        write_picture(&place(&f.name)?, &qrm_plot::figure(f)?)?;
+    }
+    for a in attachments {
+        write_atomic(&place(&a.name)?, a.bytes())?;
+    }
     Ok(())
 }

@@ -120,6 +120,55 @@ impl Drop for Staging {
     }
 }
 
+/// One file filled by a writer that wants a path (an MCAP log), moved to its name by
+/// [`StagedFile::commit`]: whole or not at all, and removed on Ctrl-C like a [`Staging`]
+/// directory (it is written inside one, beside the target).
+#[derive(Debug)]
+pub struct StagedFile {
+    stage: Staging,
+    file: PathBuf,
+    target: PathBuf,
+}
+
+impl StagedFile {
+    /// Stages `path`.
+    ///
+    /// # Errors
+    /// [`FileError::Path`] when `path` is a directory or names none; as [`Staging::new`].
+    pub fn new(path: &Path) -> Result<Self> {
+        let name = path.file_name().filter(|_| !path.is_dir()).ok_or_else(|| {
+            FileError::Path(format!("{} is a directory, not a file", path.display()))
+        })?;
+        let dir = match path.parent() {
+            Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
+            _ => PathBuf::from("."),
+        };
+        let stage = Staging::new(&dir.join(format!(".{}.file", name.to_string_lossy())))?;
+        Ok(Self {
+            file: stage.path().join(name),
+            stage,
+            target: path.to_path_buf(),
+        })
+    }
+
+    /// Where the writer writes.
+    #[must_use]
+    pub fn path(&self) -> &Path {
+        &self.file
+    }
+
+    /// Moves the file to its name (replacing what was there).
+    ///
+    /// # Errors
+    /// [`FileError::Io`] naming the target.
+    pub fn commit(self) -> Result<()> {
+        std::fs::rename(&self.file, &self.target)
+            .map_err(FileError::io("moving the result into", &self.target))?;
+        drop(self.stage);
+        Ok(())
+    }
+}
+
 #[cfg(test)]
 #[allow(clippy::unwrap_used)] // tests: a panic is the failure report
 mod tests {
@@ -161,5 +210,29 @@ mod tests {
         assert!(!staged.exists());
         drop(s);
         assert!(!out.exists());
+    }
+
+    #[test]
+    fn a_staged_file_appears_whole_on_commit_and_not_at_all_when_dropped() {
+        let root = std::env::temp_dir().join(format!("qrm-files-file-{}", std::process::id()));
+        std::fs::create_dir_all(&root).unwrap();
+        let target = root.join("run.mcap");
+        {
+            let f = StagedFile::new(&target).unwrap();
+            std::fs::write(f.path(), "half").unwrap();
+        } // an error: dropped without a commit
+        assert!(!target.exists());
+        let f = StagedFile::new(&target).unwrap();
+        std::fs::write(f.path(), "whole").unwrap();
+        f.commit().unwrap();
+        assert_eq!(std::fs::read_to_string(&target).unwrap(), "whole");
+        // nothing but the file is left beside it
+        let names: Vec<_> = std::fs::read_dir(&root)
+            .unwrap()
+            .map(|e| e.unwrap().file_name())
+            .collect();
+        assert_eq!(names, ["run.mcap"]);
+        assert!(matches!(StagedFile::new(&root), Err(FileError::Path(_))));
+        std::fs::remove_dir_all(&root).unwrap();
     }
 }

@@ -5,7 +5,7 @@ use studies::{Figure, Plot};
 
 use crate::charts::{Series, edc_scatter, heatmap, histogram, line_chart};
 use crate::regions::{RegionPicture, reference_pair, region_map};
-use crate::sites::{DemoPicture, demo_picture, runs_map};
+use crate::sites::{DemoPicture, demo_picture, runs_map, scenario_map};
 use crate::{Picture, Result};
 
 /// Draws a study's figure by its kind.
@@ -52,6 +52,11 @@ pub fn figure(f: &Figure) -> Result<Picture> {
                 runs.iter().map(|r| (r.points.clone(), r.reached)).collect();
             runs_map(&f.title, world, drive, &runs)
         }
+        Plot::Scenario {
+            world,
+            trajectory,
+            rays,
+        } => scenario_map(&f.title, world, trajectory, rays),
         Plot::ReferencePair { observed, inferred } => reference_pair(&f.title, observed, inferred),
         Plot::Navigation(n) => navigation(&f.title, n),
     }

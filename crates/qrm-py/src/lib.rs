@@ -47,6 +47,7 @@ fn _qrm(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(mapping::monte_carlo_config, m)?)?;
     m.add_function(wrap_pyfunction!(calculus::builtin_names, m)?)?;
     m.add_function(wrap_pyfunction!(simulation::simulate, m)?)?;
+    m.add_function(wrap_pyfunction!(simulation::sim_record, m)?)?;
     m.add_class::<regions::SalientRegionMap>()?;
     m.add_function(wrap_pyfunction!(regions::serge_run, m)?)?;
     m.add_function(wrap_pyfunction!(regions::serge_cross_validate, m)?)?;

@@ -3,7 +3,7 @@
 
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyArrayMethods};
 use pyo3::prelude::*;
-use serge::{BeliefSet, CellMasses, Grid, Serge, SergeParams};
+use serge::{BeliefSet, SergeParams};
 
 use crate::calculus::Calculus;
 use crate::errors::{invalid, serge_err};
@@ -187,25 +187,23 @@ pub(crate) fn serge_run(
     window: Option<(f64, f64, f64, f64)>,
     seed: u64,
 ) -> PyResult<SalientRegionMap> {
-    let text = beliefs_json.to_owned();
-    crate::pool::detach(py, move || {
-        let beliefs = BeliefSet::from_json_str(&text, "beliefs")?;
-        let g = match window {
-            Some((a, b, c, d)) => Grid::new([a, b, c, d], grid, grid)?,
-            None => Grid::around(&beliefs, grid, grid)?,
-        };
-        let masses = CellMasses::compute(&beliefs, g)?;
-        let serge = Serge::new(&masses)?;
-        let mut params = SergeParams::new(mu, sigma).seed(seed);
-        if let Some(t) = trials {
-            params = params.trials(t);
-        }
-        Ok(SalientRegionMap {
-            inner: serge.run(&params)?,
-            initial_regions: serge.n_initial_regions(),
-        })
+    let beliefs = BeliefSet::from_json_str(beliefs_json, "beliefs").map_err(serge_err)?;
+    let mut params = SergeParams::new(mu, sigma).seed(seed);
+    if let Some(t) = trials {
+        params = params.trials(t);
+    }
+    // the job `qrm serge run` runs
+    let job = studies::serge::region_map::RegionMapJob {
+        beliefs,
+        window: window.map(|(a, b, c, d)| [a, b, c, d]),
+        cells: grid,
+        params,
+    };
+    let run = crate::pool::detach(py, move || job.run()).map_err(crate::errors::study_err)?;
+    Ok(SalientRegionMap {
+        inner: run.map,
+        initial_regions: run.initial_regions,
     })
-    .map_err(serge_err)
 }
 
 /// The thesis's cross-validation study on a generated dataset; returns JSON records.

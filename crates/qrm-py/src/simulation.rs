@@ -4,7 +4,7 @@ use numpy::{IntoPyArray, PyArray2};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
-use crate::errors::{invalid, sim_err};
+use crate::errors::{files_err, invalid, sim_err, study_err};
 
 /// Runs a scenario (pqrm-100, qlink-200, hallway, field) from a seed. Returns the frames: dicts
 /// {"t", "pose": (x, y, theta), "ids", "xy" (n, 2), "cov" (n, 3) = [cxx, cxy, cyy]} in the robot
@@ -60,4 +60,56 @@ pub(crate) fn simulate<'py>(
         out.push(d);
     }
     Ok(out)
+}
+
+/// Runs a scenario and writes the recording `qrm sim` writes into `out` (observations.csv,
+/// truth.csv, world.toml, run.mcap, scenario.svg/png), whole or not at all
+/// (`studies::simulation`, files through `qrm-files`). `detector` is "ideal" or "lidar";
+/// `world` a TOML world file replacing the scenario's. Returns the names written.
+#[pyfunction]
+#[pyo3(signature = (scenario, seed, out, *, detector = "ideal", lidar = true, landmark_radius = None, world = None))]
+#[allow(clippy::too_many_arguments)] // a Python signature of keyword arguments
+pub(crate) fn sim_record(
+    py: Python<'_>,
+    scenario: &str,
+    seed: u64,
+    out: std::path::PathBuf,
+    detector: &str,
+    lidar: bool,
+    landmark_radius: Option<f64>,
+    world: Option<std::path::PathBuf>,
+) -> PyResult<Vec<String>> {
+    use studies::simulation::{Detector, Simulation, read_world};
+    let detector = match detector {
+        "ideal" => Detector::Ideal,
+        "lidar" => Detector::Lidar,
+        other => {
+            return Err(invalid(format!(
+                "unknown detector `{other}` (ideal or lidar)"
+            )));
+        }
+    };
+    let world = world
+        .as_deref()
+        .map(read_world)
+        .transpose()
+        .map_err(study_err)?;
+    let sim = Simulation {
+        scenario: scenario.to_owned(),
+        seed,
+        world,
+        landmark_radius,
+        detector,
+        lidar,
+    };
+    sim.check().map_err(study_err)?;
+    crate::pool::detach(py, || {
+        let run = sim.run().map_err(study_err)?;
+        let products = run.products().map_err(study_err)?;
+        let stage = qrm_files::Staging::new(&out).map_err(files_err)?;
+        qrm_files::write_products(stage.path(), &products).map_err(files_err)?;
+        let written = crate::study_runner::files_under(stage.path());
+        stage.commit().map_err(files_err)?;
+        Ok(written)
+    })
 }

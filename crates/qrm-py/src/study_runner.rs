@@ -142,7 +142,7 @@ pub(crate) fn studies_save(
 }
 
 /// Every file under `dir`, relative to it, sorted.
-fn files_under(dir: &std::path::Path) -> Vec<String> {
+pub(crate) fn files_under(dir: &std::path::Path) -> Vec<String> {
     let mut stack = vec![dir.to_path_buf()];
     let mut files = Vec::new();
     while let Some(d) = stack.pop() {

@@ -1,8 +1,8 @@
 //! EDC classification throughput on 10^7 random triplets, one core and two.
 //!
 //! The baseline is the vectorised NumPy implementation of the same rule in
-//! `classify_numpy.py` beside this file, which runs this bench (or reads its last result)
-//! and prints the ratio: `python crates/qsr-core/benches/classify_numpy.py`.
+//! `crates/qrm-py/benches/classify_numpy.py` (with the wheel it imports), which runs this
+//! bench (or reads its last result) and prints the ratio.
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use qsr_core::{Calculus, StateId};

@@ -22,6 +22,25 @@ pub fn read_text(path: &Path, max_bytes: u64) -> std::io::Result<String> {
     })
 }
 
+/// Reads a stream (stdin) as UTF-8 text of at most `max_bytes` bytes: an endless stream
+/// (`< /dev/zero`) ends with an error instead of growing.
+///
+/// # Errors
+/// `io::Error` when the stream fails, is larger than `max_bytes`, or is not UTF-8.
+pub fn read_stream(stream: impl Read, max_bytes: u64) -> std::io::Result<String> {
+    let mut text = String::new();
+    stream
+        .take(max_bytes.saturating_add(1))
+        .read_to_string(&mut text)?;
+    if text.len() as u64 > max_bytes {
+        return Err(std::io::Error::new(
+            std::io::ErrorKind::InvalidData,
+            format!("more than {max_bytes} bytes"),
+        ));
+    }
+    Ok(text)
+}
+
 /// Reads `path` as bytes (a binary log) of at most `max_bytes` bytes.
 ///
 /// # Errors

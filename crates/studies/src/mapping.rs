@@ -390,6 +390,49 @@ impl Mapped {
     }
 }
 
+/// Saved maps of one area merged into one (`qrm pqrm merge`; the maps' beliefs of a set
+/// fused, [`pqrm::robots::merge_maps`]), with a summary scored against `truth` when given: a
+/// MRCLAM folder (its surveyed landmarks) or a truth CSV `landmark,x,y`.
+///
+/// # Errors
+/// The loaders' errors naming the file; [`StudyError::InvalidParameter`] for a folder without
+/// surveyed landmarks; [`StudyError::Pqrm`] for maps of different calculi.
+pub fn merge_saved(maps: &[PathBuf], truth: Option<&Path>) -> Result<(Pqrm, Map<String, Value>)> {
+    let loaded = maps
+        .iter()
+        .map(|p| Pqrm::load(p))
+        .collect::<std::result::Result<Vec<_>, _>>()?;
+    let truth = match truth {
+        Some(t) if t.is_dir() => Some(
+            pqrm::loaders::read_mrclam(t, pqrm::loaders::RangeBearingNoise::MRCLAM)?
+                .truth
+                .ok_or_else(|| {
+                    StudyError::InvalidParameter(format!(
+                        "{} has no surveyed landmarks",
+                        t.display()
+                    ))
+                })?,
+        ),
+        Some(t) => Some(read_truth_csv(t)?),
+        None => None,
+    };
+    let merged = pqrm::robots::merge_maps(&loaded)?;
+    let mut summary = Map::new();
+    summary.insert("calculus".into(), json!(merged.calculus().name()));
+    let names: Vec<String> = maps.iter().map(|p| p.display().to_string()).collect();
+    summary.insert("maps".into(), json!(names));
+    let sizes: Vec<usize> = loaded.iter().map(Pqrm::len).collect();
+    summary.insert("sets_per_map".into(), json!(sizes));
+    summary.insert("n_sets".into(), json!(merged.len()));
+    summary.insert("mean_entropy".into(), json!(merged.mean_entropy()));
+    if let Some(truth) = &truth
+        && !merged.is_empty()
+    {
+        score_into(&mut summary, &evaluate(&merged, truth)?);
+    }
+    Ok((merged, summary))
+}
+
 /// A map's scores against the truth, into a summary.
 pub fn score_into(summary: &mut Map<String, Value>, m: &pqrm::MapMetrics) {
     summary.insert("n_scored".into(), json!(m.n_scored));

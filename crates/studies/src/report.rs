@@ -432,6 +432,16 @@ pub enum Plot {
         /// Inferred sets.
         inferred: Vec<(f64, f64, f64)>,
     },
+    /// A simulated run from above: the world, the robot's path and rays to what it detected
+    /// (`qrm sim`'s picture).
+    Scenario {
+        /// The world.
+        world: sim2d::WorldSpec,
+        /// The path (m).
+        trajectory: Vec<(f64, f64)>,
+        /// Rays from the robot to its detections, `(from, to)` (m).
+        rays: Vec<((f64, f64), (f64, f64))>,
+    },
     /// One navigation over a simulated site and, beside it, a calculus's regions (the demo's
     /// picture); boxed, being far larger than the other kinds.
     Navigation(Box<NavigationPicture>),
@@ -535,6 +545,19 @@ impl Attachment {
     pub fn bytes(&self) -> &[u8] {
         self.data.as_deref().unwrap_or(self.text.as_bytes())
     }
+}
+
+/// Files a job makes for a front end to write as they are — tables (as CSV), figures (drawn by
+/// `qrm-plot`), attachments — when the job is not a study with a report (`qrm sim`, a noise
+/// calibration, a salient region map): one definition of its files for the CLI and Python.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+pub struct Products {
+    /// Tables, each written as `name.csv`.
+    pub tables: Vec<Table>,
+    /// Figures, each written as `name.svg` and `name.png`.
+    pub figures: Vec<Figure>,
+    /// Files written as they are.
+    pub attachments: Vec<Attachment>,
 }
 
 /// `Option<Vec<u8>>` as base64 text (standard alphabet, padded) or null.

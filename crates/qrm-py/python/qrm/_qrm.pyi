@@ -28,6 +28,7 @@ __all__ = [
     "monte_carlo_config",
     "builtin_names",
     "simulate",
+    "sim_record",
     "SalientRegionMap",
     "serge_run",
     "serge_cross_validate",
@@ -216,6 +217,16 @@ def monte_carlo_shard(config: str, start: int, count: int, progress: _Callback =
 def monte_carlo_aggregate(config: str, shards: List[str]) -> str: ...
 def monte_carlo_config(*, quick: bool = False) -> str: ...
 def simulate(scenario: str, seed: int, *, lidar: bool = False) -> List[Frame]: ...
+def sim_record(
+    scenario: str,
+    seed: int,
+    out: Union[str, os.PathLike[str]],
+    *,
+    detector: str = "ideal",
+    lidar: bool = True,
+    landmark_radius: Optional[float] = None,
+    world: Optional[Union[str, os.PathLike[str]]] = None,
+) -> List[str]: ...
 
 @final
 class SalientRegionMap:

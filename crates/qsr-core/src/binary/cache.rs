@@ -30,6 +30,21 @@ pub enum CacheOutcome {
     Derived(String),
 }
 
+/// Where derived tables are cached unless told otherwise: `QRM_CACHE_DIR` (set but empty: no
+/// cache), else `$XDG_CACHE_HOME/qrm`, else `~/.cache/qrm` (`None` without a home).
+#[must_use]
+pub fn default_cache_dir() -> Option<PathBuf> {
+    if let Some(dir) = std::env::var_os("QRM_CACHE_DIR") {
+        return (!dir.is_empty()).then(|| PathBuf::from(dir));
+    }
+    if let Some(x) = std::env::var_os("XDG_CACHE_HOME").filter(|x| !x.is_empty()) {
+        return Some(PathBuf::from(x).join("qrm"));
+    }
+    std::env::var_os("HOME")
+        .filter(|h| !h.is_empty())
+        .map(|h| PathBuf::from(h).join(".cache").join("qrm"))
+}
+
 /// FNV-1a, 64 bit: stable across Rust versions and platforms (unlike `DefaultHasher`).
 #[must_use]
 pub(crate) fn fnv1a(bytes: &[u8]) -> u64 {
@@ -131,6 +146,22 @@ impl BinaryCalculus {
     #[must_use]
     pub fn table_hash(&self) -> u64 {
         fnv1a(self.definition().as_bytes())
+    }
+
+    /// [`BinaryCalculus::load_or_derive_tables`] in [`default_cache_dir`]; without one the
+    /// tables are derived and kept in memory.
+    ///
+    /// # Errors
+    /// As [`BinaryCalculus::compose_table`] when the table is too large to derive.
+    pub fn load_or_derive_cached(&self) -> crate::Result<CacheOutcome> {
+        match default_cache_dir() {
+            Some(dir) => self.load_or_derive_tables(&dir),
+            None if self.derived.compose.get().is_some() => Ok(CacheOutcome::InMemory),
+            None => {
+                self.compose_table()?;
+                Ok(CacheOutcome::Derived("no cache directory".into()))
+            }
+        }
     }
 
     /// Loads the tables from `dir` when a file with this calculus's hash is there and

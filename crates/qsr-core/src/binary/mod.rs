@@ -28,7 +28,8 @@
 //! - [`DirectionPartition`]: how a calculus cuts the circle of directions.
 //! - [`BinaryCalculus`]: names, relations, classification, derived tables.
 //! - [`ConverseTable`]: `X r Y ⇒ Y conv(r) X`; composition reuses [`crate::ComposeTable`].
-//! - the on-disk table cache ([`BinaryCalculus::load_or_derive_tables`], [`CacheOutcome`]).
+//! - the on-disk table cache ([`BinaryCalculus::load_or_derive_tables`], [`CacheOutcome`],
+//!   [`default_cache_dir`]).
 //! - [`BinaryNetwork`] and [`close_binary`]: algebraic closure of binary networks.
 //! - [`render_binary_svg`]: a picture of the partition of directions.
 //!
@@ -45,7 +46,7 @@ mod network;
 mod picture;
 mod relations;
 
-pub use cache::{CacheOutcome, cache_path};
+pub use cache::{CacheOutcome, cache_path, default_cache_dir};
 pub use calculus::{
     BINARY_NAMES, BinaryCalculus, BinaryFamily, DerivationCost, MAX_DERIVATION_STEPS, MAX_OPRA_M,
     MAX_STAR_M, MAX_TABLE_BYTES, is_binary_name,

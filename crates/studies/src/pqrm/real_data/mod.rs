@@ -128,6 +128,36 @@ impl RealDataConfig {
         }
     }
 
+    /// Takes a user's noise request (`--noise`, `--sigma-range`, `--sigma-bearing`): `auto`
+    /// fits, `fixed` uses the given σs (MRCLAM's where one is missing); without a mode a given
+    /// σ means fixed and none means fitted.
+    ///
+    /// # Errors
+    /// [`StudyError::InvalidParameter`] for `auto` beside given σs.
+    pub fn request_noise(&mut self, request: &crate::recording::NoiseRequest) -> Result<()> {
+        use crate::recording::NoiseMode;
+        let given = request.sigma_range.is_some() || request.sigma_bearing.is_some();
+        self.noise = match request.mode {
+            Some(NoiseMode::Auto) if given => {
+                return Err(StudyError::InvalidParameter(
+                    "--noise auto fits σ_r and σ_b; drop --sigma-range/--sigma-bearing or say \
+                     --noise fixed"
+                        .into(),
+                ));
+            }
+            Some(NoiseMode::Fixed) => NoiseSource::Given,
+            None if given => NoiseSource::Given,
+            Some(NoiseMode::Auto) | None => NoiseSource::Fitted,
+        };
+        if let Some(s) = request.sigma_range {
+            self.sigma_range = s;
+        }
+        if let Some(s) = request.sigma_bearing {
+            self.sigma_bearing = s;
+        }
+        Ok(())
+    }
+
     /// The mapper's settings of the main run (τ set per calculus later).
     fn pqrm_config(&self) -> PqrmConfig {
         PqrmConfig {
@@ -388,4 +418,37 @@ fn main_run(c: &RealDataConfig, rec: Recording, progress: &dyn Progress) -> Resu
         tempering_failed,
         robots,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{NoiseSource, RealDataConfig};
+    use crate::recording::{NoiseMode, NoiseRequest};
+
+    fn asked(mode: Option<NoiseMode>, sigma_range: Option<f64>) -> Option<RealDataConfig> {
+        let mut config = RealDataConfig::quick(0);
+        let request = NoiseRequest {
+            mode,
+            sigma_range,
+            sigma_bearing: None,
+        };
+        config.request_noise(&request).ok().map(|()| config)
+    }
+
+    #[test]
+    fn a_given_sigma_means_fixed_noise_and_auto_beside_it_is_refused() {
+        let fitted = asked(None, None).unwrap();
+        assert_eq!(fitted.noise, NoiseSource::Fitted);
+        let given = asked(None, Some(0.3)).unwrap();
+        assert_eq!((given.noise, given.sigma_range), (NoiseSource::Given, 0.3));
+        let default_bearing = RealDataConfig::quick(0).sigma_bearing;
+        assert_eq!(given.sigma_bearing, default_bearing);
+        let fixed = asked(Some(NoiseMode::Fixed), None).unwrap();
+        assert_eq!(fixed.noise, NoiseSource::Given);
+        assert_eq!(
+            asked(Some(NoiseMode::Auto), None).unwrap().noise,
+            NoiseSource::Fitted
+        );
+        assert!(asked(Some(NoiseMode::Auto), Some(0.3)).is_none());
+    }
 }

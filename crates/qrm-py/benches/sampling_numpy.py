@@ -14,11 +14,12 @@ Baselines, each timed from drawing the samples (NumPy's generator, the same for 
   step (each writes its own row, so the counts do not depend on the threads).
 qrm draws its own samples (a seeded generator of its own), so it is checked in distribution:
 for a few triplets `qrm.single_observation` and the baselines' histograms agree within
-sampling noise. qrm is timed by the criterion bench `sampling.rs` beside this file
+sampling noise. qrm is timed by the criterion bench `crates/pqrm/benches/sampling.rs`
 (`pqrm_step_m10_s1000`: draw + counts, 1 and 2 threads), run from here in the same session.
 
 Usage (workspace root; a venv with numpy, numba and the qrm wheel):
-    python crates/pqrm/benches/sampling_numpy.py [--skip-cargo] [--repeat 5]
+    python crates/qrm-py/benches/sampling_numpy.py [--skip-cargo] [--repeat 5]
+This script lives with the wheel it imports (qrm-py), above the kernel crates.
 """
 from __future__ import annotations
 

@@ -18,8 +18,9 @@ array (one pass, no arithmetic to speak of). Classification cannot go faster tha
 arrives.
 
 Usage (workspace root; a venv with numpy, numba and the qrm wheel):
-    python crates/qsr-core/benches/classify_numpy.py [--n 10000000] [--repeat 3]
-The criterion bench `classify.rs` beside this file times the Rust kernel without Python.
+    python crates/qrm-py/benches/classify_numpy.py [--n 10000000] [--repeat 3]
+The criterion bench `crates/qsr-core/benches/classify.rs` times the Rust kernel without
+Python. This script lives with the wheel it imports (qrm-py), above the kernel crates.
 """
 from __future__ import annotations
 
