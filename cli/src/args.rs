@@ -355,19 +355,18 @@ pub enum CalculusCmd {
         /// Binary calculi: print GQR's text form, one `r : s :: ( t ... )` per line.
         #[arg(long, conflicts_with = "json")]
         gqr: bool,
-        /// `sampled` (witnessed configurations, any calculus) or `cells` (thesis Algorithm 3
-        /// over a learned calculus's raster with interval bounds: sound by construction).
-        #[arg(long, default_value = "sampled")]
-        method: String,
+        /// How the table is derived.
+        #[arg(long, value_enum, default_value_t = ComposeMethod::Sampled)]
+        method: ComposeMethod,
     },
     /// A permutation operation table (ternary calculi) or the converse (binary calculi).
     Permute {
         /// Built-in name or spec file.
         name: String,
-        /// Ternary: inverse, shortcut, shortcut-inverse, homing or homing-inverse; binary
-        /// (opra-M, star-m): converse.
-        #[arg(long)]
-        op: String,
+        /// The operation: one of the five permutations of a ternary calculus, or the converse
+        /// of a binary one (opra-M, star-m).
+        #[arg(long, value_enum)]
+        op: Operation,
         /// Print JSON `{"states", "table": {r: [t...]}}`.
         #[arg(long)]
         json: bool,
@@ -386,4 +385,46 @@ pub enum CalculusCmd {
         #[arg(long, default_value_t = 640)]
         width: u32,
     },
+}
+
+/// How `qrm calculus compose` derives a ternary table.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum ComposeMethod {
+    /// Witnessed configurations (any calculus).
+    Sampled,
+    /// Thesis Algorithm 3 over a learned calculus's raster with interval bounds: sound by
+    /// construction.
+    Cells,
+}
+
+/// `qrm calculus permute --op`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum Operation {
+    /// {AB:C} → {BA:C} (ternary).
+    Inverse,
+    /// {AB:C} → {AC:B} (ternary).
+    Shortcut,
+    /// {AB:C} → {CA:B} (ternary).
+    ShortcutInverse,
+    /// {AB:C} → {BC:A} (ternary).
+    Homing,
+    /// {AB:C} → {CB:A} (ternary).
+    HomingInverse,
+    /// A r B → B r' A (binary calculi).
+    Converse,
+}
+
+impl Operation {
+    /// The ternary permutation (`None`: the converse).
+    pub fn permutation(self) -> Option<qsr_core::Permutation> {
+        use qsr_core::Permutation as P;
+        match self {
+            Self::Inverse => Some(P::Inverse),
+            Self::Shortcut => Some(P::Shortcut),
+            Self::ShortcutInverse => Some(P::ShortcutInverse),
+            Self::Homing => Some(P::Homing),
+            Self::HomingInverse => Some(P::HomingInverse),
+            Self::Converse => None,
+        }
+    }
 }

@@ -7,7 +7,7 @@ use anyhow::{Context, Result, bail};
 use qsr_core::binary::{BINARY_NAMES, BinaryCalculus, is_binary_name};
 use qsr_core::{BUILTIN_NAMES, Calculus, Permutation, RenderOptions};
 
-use crate::args::CalculusCmd;
+use crate::args::{CalculusCmd, ComposeMethod};
 use crate::binary_cmd::{BinaryJob, TableFormat};
 use crate::calculus_text::classify_stdin;
 use crate::output::write_atomic;
@@ -86,9 +86,9 @@ fn validate_binary(cmd: &CalculusCmd) -> Result<Option<Job>> {
             gqr,
             method,
         } if is_binary_name(name) => {
-            if method != "sampled" {
+            if *method == ComposeMethod::Cells {
                 bail!(
-                    "--method {method} is for learned ternary calculi; `{name}`'s composition is \
+                    "--method cells is for learned ternary calculi; `{name}`'s composition is \
                      derived exactly"
                 );
             }
@@ -105,8 +105,8 @@ fn validate_binary(cmd: &CalculusCmd) -> Result<Option<Job>> {
             json,
             gqr,
         } if is_binary_name(name) => {
-            if op != "converse" {
-                bail!("`{name}` is binary: its one permutation is `--op converse`, not `{op}`");
+            if let Some(p) = op.permutation() {
+                bail!("`{name}` is binary: its one permutation is `--op converse`, not `{p}`");
             }
             (
                 name,
@@ -115,7 +115,7 @@ fn validate_binary(cmd: &CalculusCmd) -> Result<Option<Job>> {
                 },
             )
         }
-        CalculusCmd::Permute { name, op, .. } if op == "converse" => bail!(
+        CalculusCmd::Permute { name, op, .. } if op.permutation().is_none() => bail!(
             "`converse` is the permutation of binary calculi (opra-M, star-m); `{name}` is \
              ternary: inverse, shortcut, shortcut-inverse, homing or homing-inverse"
         ),
@@ -161,20 +161,16 @@ fn validate(cmd: CalculusCmd) -> Result<Job> {
         } => Job::Compose {
             calculus: load(&name)?,
             json,
-            cells: match method.as_str() {
-                "sampled" => false,
-                "cells" => true,
-                other => bail!("unknown compose method `{other}` (sampled or cells)"),
-            },
+            cells: method == ComposeMethod::Cells,
         },
-        CalculusCmd::Permute { name, op, json, .. } => {
-            let op: Permutation = op.parse()?;
-            Job::Permute {
-                calculus: load(&name)?,
-                op,
-                json,
-            }
-        }
+        CalculusCmd::Permute { name, op, json, .. } => Job::Permute {
+            calculus: load(&name)?,
+            // the converse was refused above for a ternary calculus
+            op: op
+                .permutation()
+                .context("the converse of a ternary calculus")?,
+            json,
+        },
         CalculusCmd::Render { name, out, width } => {
             if out
                 .extension()

@@ -94,7 +94,7 @@ fn default_window(calculus: &Calculus) -> [f64; 4] {
 /// Renders the partition of `calculus` as an SVG document.
 ///
 /// # Errors
-/// [`QsrError::Spec`] for an empty window or zero resolution (and should plotters fail).
+/// [`crate::QsrError::Spec`] for an empty window or zero resolution (and should plotters fail).
 pub fn render_svg(calculus: &Calculus, options: &RenderOptions) -> Result<String> {
     register_font();
     let window = options.window.unwrap_or_else(|| default_window(calculus));
