@@ -85,8 +85,8 @@ pub struct UpdateReport {
 
 /// A probabilistic qualitative relational map over one ternary calculus.
 ///
-/// The beliefs live in a [`crate::store`]-style flat table (log-probabilities rounded to
-/// `f32` between steps, ≈ 120 bytes per EDC set); every update computes in `f64`.
+/// The beliefs live in one flat table (the private `store` module: log-probabilities rounded
+/// to `f32` between steps, ≈ 120 bytes per EDC set); every update computes in `f64`.
 #[derive(Debug, Clone)]
 pub struct Pqrm {
     calculus: Calculus,
@@ -350,7 +350,7 @@ impl Pqrm {
     /// [`crate::reason`]), with the default options.
     ///
     /// # Errors
-    /// As [`crate::reason::infer_with`].
+    /// As [`crate::reason::infer`].
     pub fn infer(&self, set: LandmarkSet) -> Result<crate::reason::Inference> {
         crate::reason::infer(self, set)
     }

@@ -18,7 +18,7 @@
 //! | [`charts`] | line charts with error bars, the EDC scatter (Fig 2.8), confusion heatmaps (Fig 2.9), histograms |
 //! | [`sites`] | a simulated site from above: a scenario's run, navigation runs (Fig 4.9), the demo's picture |
 //! | [`regions`] | region maps cell by cell (Figs 3.8–3.10), a reference pair's frame |
-//! | [`figure`] | a study's [`studies::Figure`] drawn by its kind |
+//! | [`figure`](mod@figure) | a study's [`studies::Figure`] drawn by its kind |
 //!
 //! ## Naming rule
 //! A public function is named after what it draws (`line_chart`, `region_map`) and returns a

@@ -5,8 +5,8 @@
 //! package (`qrm/__init__.py`, `_qrm.pyi`, `py.typed`) sits in `python/qrm`.
 //!
 //! Errors: each Rust error kind maps to one exception class under `qrm.QrmError` (see
-//! [`errors`]). Long calls release the interpreter and run in a fork-safe thread pool
-//! ([`pool`]). A Rust panic inside a
+//! `errors.rs`). Long calls release the interpreter and run in a fork-safe thread pool
+//! (`pool.rs`). A Rust panic inside a
 //! call becomes a Python `PanicException` (pyo3 catches it at the boundary), never a crash.
 #![allow(unsafe_code)] // pyo3's #[pymodule]/#[pyclass]/#[pymethods] expand to unsafe FFI glue; this crate writes none itself.
 

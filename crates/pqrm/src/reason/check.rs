@@ -86,7 +86,7 @@ fn confidence(map: &Pqrm, set: LandmarkSet) -> f64 {
 /// *irreducible*, not necessarily the smallest set (finding that is NP-hard).
 ///
 /// # Errors
-/// [`PqrmError::Calculus`] for a calculus without ternary tables or a map too large.
+/// [`crate::PqrmError::Calculus`] for a calculus without ternary tables or a map too large.
 pub fn check(map: &Pqrm) -> Result<MapCheck> {
     let algebra = Algebra::of(map.calculus(), TableScope::Sound)?;
     let ids = landmarks(map);

@@ -48,7 +48,7 @@ pub(crate) fn orderings(s: LandmarkSet) -> [LandmarkSet; 6] {
 /// constrained by `selection`, the others universal.
 ///
 /// # Errors
-/// [`PqrmError::Calculus`] when the network would not fit in memory.
+/// [`crate::PqrmError::Calculus`] when the network would not fit in memory.
 pub fn to_network(map: &Pqrm, selection: Selection) -> Result<Network> {
     let ids = landmarks(map);
     let index: BTreeMap<LandmarkId, usize> = ids.iter().enumerate().map(|(i, l)| (*l, i)).collect();
