@@ -172,7 +172,7 @@ fn map_into(
 fn calibrate(a: CalibrateArgs) -> Result<()> {
     let calibration = Calibration::of_recording(a.format.into(), &a.input)?;
     let stage = Staging::new(&a.out)?;
-    qrm_files::write_products(stage.path(), &calibration.products()?)?;
+    qrm_files::write_products(stage.path(), &calibration.products())?;
     // Committed before printing: a closed pipe must not lose the result.
     stage.commit()?;
     outln!("{}", serde_json::to_string_pretty(&calibration.summary())?)?;

@@ -150,7 +150,7 @@ fn run_map(a: RunArgs) -> Result<()> {
     // Written into a staging directory, moved into place only when all is done: a
     // failure or Ctrl-C leaves nothing a user could take for a result.
     let stage = Staging::new(&a.out)?;
-    qrm_files::write_products(stage.path(), &run.products()?)?;
+    qrm_files::write_products(stage.path(), &run.products())?;
     outln!("{}; wrote {}", run.describe(), a.out.display())?;
     stage.commit()?;
     Ok(())

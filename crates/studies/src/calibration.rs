@@ -84,14 +84,10 @@ impl Calibration {
         })
     }
 
-    /// `calibration.json` (the summary) and the histogram `residuals`.
-    ///
-    /// # Errors
-    /// None in practice: the summary is always JSON (typed all the same).
-    pub fn products(&self) -> Result<Products> {
-        let summary = serde_json::to_string_pretty(&self.summary()).map_err(|e| {
-            crate::StudyError::InvalidParameter(format!("the calibration as JSON: {e}"))
-        })?;
+    /// `calibration.json` (the summary, indented) and the histogram `residuals`.
+    #[must_use]
+    pub fn products(&self) -> Products {
+        let summary = format!("{:#}", self.summary());
         let edges = (0..=32).map(|i| -CLAMP + 0.5 * f64::from(i)).collect();
         let residuals = Figure {
             name: "residuals".to_owned(),
@@ -106,11 +102,11 @@ impl Calibration {
                 groups: vec![("residuals".to_owned(), self.normalised.clone())],
             },
         };
-        Ok(Products {
+        Products {
             tables: Vec::new(),
             figures: vec![residuals],
             attachments: vec![Attachment::text("calibration.json", summary)],
-        })
+        }
     }
 }
 
@@ -149,7 +145,7 @@ mod tests {
                 .unwrap()
                 .starts_with("csv files carry")
         );
-        let products = c.products().unwrap();
+        let products = c.products();
         assert_eq!(products.attachments[0].name, "calibration.json");
         std::fs::remove_dir_all(&dir).unwrap();
     }

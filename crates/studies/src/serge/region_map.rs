@@ -6,7 +6,7 @@ use std::time::Instant;
 use serde_json::json;
 use serge::{BeliefSet, CellMasses, Grid, SalientRegionMap, Serge, SergeParams};
 
-use crate::error::{Result, StudyError};
+use crate::error::Result;
 use crate::report::{Attachment, Figure, Plot, Products};
 
 /// Region numbers are written on a picture of at most this many regions.
@@ -44,7 +44,7 @@ impl RegionMapJob {
     /// Runs SERGE.
     ///
     /// # Errors
-    /// [`StudyError::Serge`] for a window, grid or μ SERGE refuses.
+    /// [`crate::StudyError::Serge`] for a window, grid or μ SERGE refuses.
     pub fn run(&self) -> Result<RegionMapRun> {
         let grid = match self.window {
             Some(w) => Grid::new(w, self.cells, self.cells)?,
@@ -86,11 +86,9 @@ impl RegionMapRun {
         )
     }
 
-    /// `map.json` (the map, its initial regions and time) and the picture `map`.
-    ///
-    /// # Errors
-    /// [`StudyError::InvalidParameter`] if the map cannot be written as JSON.
-    pub fn products(&self) -> Result<Products> {
+    /// `map.json` (the map, its initial regions and time, indented) and the picture `map`.
+    #[must_use]
+    pub fn products(&self) -> Products {
         let mut doc = self.map.to_json();
         doc["initial_regions"] = json!(self.initial_regions);
         doc["seconds"] = json!(self.seconds);
@@ -99,11 +97,11 @@ impl RegionMapRun {
             "SERGE: {} regions (μ = {}, σ = {}), log saliency {:.3}",
             m.n_regions, m.mu, m.sigma, m.log_saliency
         );
-        Ok(Products {
+        Products {
             tables: Vec::new(),
             figures: vec![map_figure("map", title, m, self.means.clone())],
-            attachments: vec![Attachment::text("map.json", pretty(&doc)?)],
-        })
+            attachments: vec![Attachment::text("map.json", format!("{doc:#}"))],
+        }
     }
 }
 
@@ -133,12 +131,6 @@ pub fn map_figure(
     }
 }
 
-/// `value` as indented JSON.
-pub(crate) fn pretty(value: &serde_json::Value) -> Result<String> {
-    serde_json::to_string_pretty(value)
-        .map_err(|e| StudyError::InvalidParameter(format!("a value JSON cannot hold: {e}")))
-}
-
 #[cfg(test)]
 #[allow(clippy::unwrap_used)] // tests: a panic is the failure report
 mod tests {
@@ -157,7 +149,7 @@ mod tests {
         let run = job.run().unwrap();
         assert_eq!(run.map.n_regions, 2);
         assert_eq!(run.means, [[0.0, 0.0], [5.0, 0.0]]);
-        let products = run.products().unwrap();
+        let products = run.products();
         let doc: serde_json::Value = serde_json::from_str(&products.attachments[0].text).unwrap();
         assert_eq!(doc["initial_regions"], json!(run.initial_regions));
         assert!(matches!(
