@@ -6,7 +6,10 @@ use anyhow::{Context, Result, bail};
 use pqrm::LandmarkSet;
 use pqrm::reason::{Fusion, InferOptions, InferenceReport, Inferrer};
 use qsr_core::Calculus;
-use qsr_core::binary::{BinaryCalculus, BinaryNetwork, close_binary, is_binary_name};
+use qsr_core::binary::{
+    BinaryAlgebra, BinaryNetwork, SolveOptions, SolveOutcome, close_binary, from_gqr_csp_str,
+    solve_binary,
+};
 use qsr_core::reason::{
     Algebra, Network, ScenarioOptions, ScenarioOutcome, TableScope, close, find_scenario,
 };
@@ -24,8 +27,12 @@ pub enum ReasonCmd {
     /// constraint became empty (the explanation goes to stderr).
     Close(NetworkArgs),
     /// One algebraically closed scenario refining the network (SparQ's
-    /// `scenario-consistency first`): `{"consistent": bool, "constraints": [...] | null}`.
+    /// `scenario-consistency first`, GQR's `consistency`): `{"consistent": bool | null,
+    /// "status": "consistent" | "inconsistent" | "unknown", "constraints": [...] | null}`.
     Scenario(ScenarioArgs),
+    /// Which laws of a relation algebra a binary calculus's tables obey (converse an
+    /// involution, identity neutral, converse of a composition, associativity).
+    Laws(LawsArgs),
     /// A saved PQRM map as a constraint network (for `close`, `scenario` or SparQ): each
     /// observed ordering constrained to its most likely state, or to every state whose
     /// probability reaches --threshold; sets never observed are universal.
@@ -51,6 +58,15 @@ pub struct CheckArgs {
     /// Print the result as JSON.
     #[arg(long)]
     pub json: bool,
+}
+
+/// `qrm reason laws`.
+#[derive(Debug, clap::Args)]
+pub struct LawsArgs {
+    /// A binary calculus: opra-M, star-m, a GQR .spec, a SparQ .lisp, or a name in
+    /// $GQR_DATA_DIR.
+    #[arg(long)]
+    pub calculus: String,
 }
 
 /// `qrm reason export`.
@@ -139,16 +155,19 @@ impl From<FusionArg> for Fusion {
 /// Where a network comes from and how it is read.
 #[derive(Debug, clap::Args)]
 pub struct NetworkArgs {
-    /// Calculus name or spec file (ternary point calculi), or a binary calculus (opra-M,
-    /// star-m) for `close`.
+    /// Calculus name or spec file (ternary point calculi), or a binary calculus: opra-M,
+    /// star-m, a GQR .spec file, a SparQ .lisp file, or a name in $GQR_DATA_DIR (or ./data).
     #[arg(long)]
     pub calculus: String,
     /// The network file (default: stdin).
     #[arg(long)]
     pub input: Option<PathBuf>,
-    /// Input form (default: by its first character, `{` JSON, `(` SparQ).
+    /// Input form (default: by its first character, `{` JSON, `(` SparQ, a digit GQR's .csp).
     #[arg(long, value_enum)]
     pub format: Option<NetworkFormat>,
+    /// Output form of a binary result: JSON (one line per network), or GQR's .csp.
+    #[arg(long, value_enum, default_value_t = NetworkFormat::Json)]
+    pub output: NetworkFormat,
     /// Use tables of configurations in general position (SparQ's planar relations) instead of
     /// the sound ones that include points on boundaries.
     #[arg(long)]
@@ -160,7 +179,7 @@ pub struct NetworkArgs {
 pub struct ScenarioArgs {
     #[command(flatten)]
     pub network: NetworkArgs,
-    /// The most search nodes before giving up (then an error).
+    /// The most search nodes before giving up (ternary: an error; binary: status "unknown").
     #[arg(long, default_value_t = ScenarioOptions::default().max_nodes)]
     pub max_nodes: usize,
 }
@@ -172,6 +191,8 @@ pub enum NetworkFormat {
     Json,
     /// SparQ's `((A B (r1 r2) C) ...)`.
     Sparq,
+    /// GQR's .csp (binary networks): `N #name`, `i j ( r1 r2 )` lines, `.`.
+    Gqr,
 }
 
 impl From<NetworkFormat> for qsr_core::reason::NetworkFormat {
@@ -179,6 +200,7 @@ impl From<NetworkFormat> for qsr_core::reason::NetworkFormat {
         match f {
             NetworkFormat::Json => Self::Json,
             NetworkFormat::Sparq => Self::Sparq,
+            NetworkFormat::Gqr => Self::Gqr,
         }
     }
 }
@@ -213,25 +235,123 @@ fn read_network(args: &NetworkArgs) -> Result<(String, String, qsr_core::reason:
     Ok((origin, text, format))
 }
 
-/// `qrm reason close` over a binary calculus (opra-M, star-m): path consistency with the
-/// exact tables.
-fn close_binary_network(args: &NetworkArgs) -> Result<()> {
+/// The binary calculus `--calculus` names, if it names one (a ternary built-in wins).
+fn binary_algebra(name: &str) -> Result<Option<BinaryAlgebra>> {
+    BinaryAlgebra::resolve(name).with_context(|| format!("loading calculus `{name}`"))
+}
+
+/// The binary networks of `--input` with their names (a .csp file may hold many).
+fn binary_networks(
+    args: &NetworkArgs,
+    algebra: &BinaryAlgebra,
+) -> Result<Vec<(String, BinaryNetwork)>> {
     if args.general_position {
         bail!(
-            "--general-position is for ternary calculi; `{}`'s tables are exact",
+            "--general-position is for ternary calculi; `{}` is binary",
             args.calculus
         );
     }
-    let calculus = BinaryCalculus::builtin(&args.calculus)
-        .with_context(|| format!("loading calculus `{}`", args.calculus))?;
     let (origin, text, format) = read_network(args)?;
-    let network = BinaryNetwork::parse(&calculus, &text, format)
-        .with_context(|| format!("reading the network from {origin}"))?;
-    let closed = close_binary(network)?;
-    if let Some(why) = closed.describe() {
-        eprintln!("inconsistent: {why}");
+    let context = || format!("reading the network from {origin}");
+    Ok(match format {
+        qsr_core::reason::NetworkFormat::Gqr => from_gqr_csp_str(algebra, &text)
+            .with_context(context)?
+            .into_iter()
+            .map(|g| (g.name, g.network))
+            .collect(),
+        f => vec![(
+            String::new(),
+            BinaryNetwork::parse(algebra, &text, f).with_context(context)?,
+        )],
+    })
+}
+
+/// One binary result in the `--output` form: a JSON line, or a .csp entry.
+fn print_binary(
+    args: &NetworkArgs,
+    name: &str,
+    status: &str,
+    network: Option<&BinaryNetwork>,
+) -> Result<()> {
+    match args.output {
+        NetworkFormat::Gqr => match network {
+            Some(net) => outln!(
+                "{}",
+                net.to_gqr_csp(format!("{name} {status}").trim_start())
+                    .trim_end()
+            )?,
+            None => outln!("# {name} {status}")?,
+        },
+        NetworkFormat::Json | NetworkFormat::Sparq => {
+            let consistent = match status {
+                "consistent" => json!(true),
+                "inconsistent" => json!(false),
+                _ => serde_json::Value::Null,
+            };
+            let mut out = json!({
+                "consistent": consistent,
+                "status": status,
+                "constraints": network.map(BinaryNetwork::constraints_json),
+            });
+            if !name.is_empty() {
+                out["name"] = json!(name);
+            }
+            outln!("{out}")?;
+        }
     }
-    print_constraints(closed.is_consistent(), closed.network.constraints_json())
+    Ok(())
+}
+
+/// `qrm reason close` over a binary calculus: path consistency.
+fn close_binary_networks(args: &NetworkArgs, algebra: &BinaryAlgebra) -> Result<()> {
+    for (name, network) in binary_networks(args, algebra)? {
+        let closed = close_binary(network)?;
+        if let Some(why) = closed.describe() {
+            eprintln!(
+                "inconsistent{}: {why}",
+                if name.is_empty() {
+                    String::new()
+                } else {
+                    format!(" ({name})")
+                }
+            );
+        }
+        let status = if closed.is_consistent() {
+            "consistent"
+        } else {
+            "inconsistent"
+        };
+        print_binary(args, &name, status, Some(&closed.network))?;
+    }
+    Ok(())
+}
+
+/// `qrm reason scenario` over a binary calculus: consistency by search.
+fn solve_binary_networks(args: &ScenarioArgs, algebra: &BinaryAlgebra) -> Result<()> {
+    let options = SolveOptions {
+        max_nodes: args.max_nodes as u64,
+    };
+    for (name, network) in binary_networks(&args.network, algebra)? {
+        let solved = solve_binary(network, &options)?;
+        let (status, scenario) = match &solved.outcome {
+            SolveOutcome::Consistent(s) => ("consistent", Some(s)),
+            SolveOutcome::Inconsistent => ("inconsistent", None),
+            SolveOutcome::Unknown => {
+                eprintln!(
+                    "unknown{}: no answer within {} search nodes (raise --max-nodes to search longer)",
+                    if name.is_empty() {
+                        String::new()
+                    } else {
+                        format!(" ({name})")
+                    },
+                    args.max_nodes
+                );
+                ("unknown", None)
+            }
+        };
+        print_binary(&args.network, &name, status, scenario)?;
+    }
+    Ok(())
 }
 
 /// `{"consistent": bool, "constraints": [...]}` on stdout.
@@ -245,13 +365,6 @@ fn print_constraints(consistent: bool, constraints: serde_json::Value) -> Result
 
 /// A ternary network and the algebra it is reasoned with (stage two of argument parsing).
 fn load(args: &NetworkArgs) -> Result<(Network, Algebra)> {
-    if is_binary_name(&args.calculus) {
-        bail!(
-            "`{}` is binary: `qrm reason close` runs on binary networks; scenarios are \
-             searched over ternary ones",
-            args.calculus
-        );
-    }
     let calculus = Calculus::resolve(&args.calculus)
         .with_context(|| format!("loading calculus `{}`", args.calculus))?;
     let (origin, text, format) = read_network(args)?;
@@ -260,6 +373,8 @@ fn load(args: &NetworkArgs) -> Result<(Network, Algebra)> {
     let scope = if args.general_position {
         TableScope::GeneralPosition
     } else {
+        // The sound tables from the disk cache (derived and written on the first run).
+        calculus.load_or_derive_cached()?;
         TableScope::Sound
     };
     let algebra = Algebra::of(&calculus, scope)
@@ -269,7 +384,28 @@ fn load(args: &NetworkArgs) -> Result<(Network, Algebra)> {
 
 pub fn run(cmd: ReasonCmd) -> Result<()> {
     match cmd {
-        ReasonCmd::Close(args) if is_binary_name(&args.calculus) => close_binary_network(&args),
+        ReasonCmd::Close(args) if let Some(alg) = binary_algebra(&args.calculus)? => {
+            close_binary_networks(&args, &alg)
+        }
+        ReasonCmd::Scenario(args) if let Some(alg) = binary_algebra(&args.network.calculus)? => {
+            solve_binary_networks(&args, &alg)
+        }
+        ReasonCmd::Laws(args) => {
+            let Some(alg) = binary_algebra(&args.calculus)? else {
+                bail!(
+                    "`{}` is not a binary calculus (opra-M, star-m, a .spec or .lisp file)",
+                    args.calculus
+                );
+            };
+            let laws = alg.check()?;
+            outln!(
+                "{} ({} relations)\n{}",
+                alg.name(),
+                alg.n_states(),
+                laws.to_text()
+            )?;
+            Ok(())
+        }
         ReasonCmd::Close(args) => {
             let (network, algebra) = load(&args)?;
             let closed = close(network, &algebra)?;
@@ -314,6 +450,7 @@ fn export(args: &ExportArgs) -> Result<()> {
     match args.format {
         NetworkFormat::Json => outln!("{}", net.to_json())?,
         NetworkFormat::Sparq => outln!("{}", net.to_sparq())?,
+        NetworkFormat::Gqr => bail!("a map's network is ternary: GQR's .csp holds binary ones"),
     }
     Ok(())
 }

@@ -396,3 +396,154 @@ fn study_runs_on_mrclam_and_judges_its_claims() {
     );
     assert!(out.join("check.csv").is_file() && out.join("config.toml").is_file());
 }
+
+/// GQR's point algebra laid out as GQR's data directory: `DIR/point.spec` and its tables.
+fn gqr_point(dir: &Path) -> PathBuf {
+    std::fs::create_dir_all(dir.join("point/calculus")).unwrap();
+    std::fs::write(
+        dir.join("point/calculus/point.conv"),
+        "< :: >\n= :: =\n> :: <\n",
+    )
+    .unwrap();
+    std::fs::write(
+        dir.join("point/calculus/point.comp"),
+        "< : < :: ( < )\n< : = :: ( < )\n< : > :: ( < = > )\n= : < :: ( < )\n= : = :: ( = )\n\
+         = : > :: ( > )\n> : < :: ( < = > )\n> : = :: ( > )\n> : > :: ( > )\n",
+    )
+    .unwrap();
+    let spec = dir.join("point.spec");
+    std::fs::write(
+        &spec,
+        "comp_table_file point/calculus/point.comp\nconverse_file point/calculus/point.conv\n\
+         identity =\ncalculus_size 3\n",
+    )
+    .unwrap();
+    spec
+}
+
+#[test]
+fn a_gqr_user_runs_their_calculus_and_csp_files_unchanged() {
+    let dir = tmp("gqr");
+    let spec = gqr_point(&dir);
+    let csp = dir.join("nets.csp");
+    std::fs::write(
+        &csp,
+        "2 # chain\n0 1 ( < )\n1 2 ( < = )\n.\n\n2 # cycle\n0 1 ( < )\n1 2 ( < )\n2 0 ( < )\n.\n",
+    )
+    .unwrap();
+    let run = |args: &[&str]| ok(args, "");
+    let json_lines = |args: &[&str]| -> Vec<Value> {
+        let out = run(args);
+        out.lines()
+            .map(|l| serde_json::from_str(l).unwrap())
+            .collect()
+    };
+    // Path consistency: one JSON line per network, named by its header.
+    let lines = json_lines(&[
+        "reason",
+        "close",
+        "--calculus",
+        spec.to_str().unwrap(),
+        "--input",
+        csp.to_str().unwrap(),
+    ]);
+    assert_eq!(lines.len(), 2, "{lines:?}");
+    assert_eq!(
+        (lines[0]["name"].as_str(), lines[0]["status"].as_str()),
+        (Some("chain"), Some("consistent"))
+    );
+    assert_eq!(
+        lines[0]["constraints"][1],
+        serde_json::json!(["0", "2", ["<"]])
+    );
+    assert_eq!(
+        (lines[1]["name"].as_str(), lines[1]["consistent"].as_bool()),
+        (Some("cycle"), Some(false))
+    );
+    // GQR's form out, and read back in (the calculus by name from GQR_DATA_DIR, as GQR does).
+    let gqr = std::process::Command::new(env!("CARGO_BIN_EXE_qrm"))
+        .env("GQR_DATA_DIR", &dir)
+        .args([
+            "reason",
+            "close",
+            "--calculus",
+            "point",
+            "--input",
+            csp.to_str().unwrap(),
+            "--output",
+            "gqr",
+        ])
+        .output()
+        .unwrap();
+    assert!(
+        gqr.status.success(),
+        "{}",
+        String::from_utf8_lossy(&gqr.stderr)
+    );
+    let gqr = String::from_utf8(gqr.stdout).unwrap();
+    assert!(
+        gqr.starts_with("2 #chain consistent\n0 1 ( < )\n0 2 ( < )\n1 2 ( < = )\n.\n"),
+        "{gqr}"
+    );
+    // Consistency by search: a scenario, none, or unknown past the budget.
+    let lines = json_lines(&[
+        "reason",
+        "scenario",
+        "--calculus",
+        spec.to_str().unwrap(),
+        "--input",
+        csp.to_str().unwrap(),
+    ]);
+    assert_eq!(lines[0]["status"], "consistent");
+    assert_eq!(
+        lines[0]["constraints"][2],
+        serde_json::json!(["1", "2", ["<"]])
+    );
+    assert_eq!(lines[1]["status"], "inconsistent");
+    let out = run(&[
+        "reason",
+        "scenario",
+        "--calculus",
+        spec.to_str().unwrap(),
+        "--max-nodes",
+        "0",
+        "--input",
+        csp.to_str().unwrap(),
+    ]);
+    assert!(
+        out.lines()
+            .next()
+            .unwrap()
+            .contains("\"status\":\"unknown\""),
+        "{out}"
+    );
+    // The laws of its tables.
+    let laws = run(&["reason", "laws", "--calculus", spec.to_str().unwrap()]);
+    assert!(
+        laws.starts_with("point (3 relations)") && laws.matches(": holds").count() == 4,
+        "{laws}"
+    );
+    // A broken table names its file and line.
+    std::fs::write(
+        dir.join("point/calculus/point.conv"),
+        "< :: >\n= :: =\n> : <\n",
+    )
+    .unwrap();
+    let e = qrm(
+        &[
+            "reason",
+            "close",
+            "--calculus",
+            spec.to_str().unwrap(),
+            "--input",
+            csp.to_str().unwrap(),
+        ],
+        "",
+    );
+    let err = String::from_utf8_lossy(&e.stderr);
+    assert!(
+        !e.status.success() && err.contains("point.conv") && err.contains("line 3"),
+        "{err}"
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}

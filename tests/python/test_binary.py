@@ -1,5 +1,6 @@
 """Binary calculi from Python: exact OPRA tables, classification, closure of pair networks."""
 import math
+import pickle
 
 import numpy as np
 import pytest
@@ -67,3 +68,69 @@ def test_close_binary_infers_and_detects():
 def test_star_render_is_svg():
     svg = qrm.BinaryCalculus.builtin("star-8").render_svg(width=200)
     assert svg.startswith("<svg") and "front" in svg
+
+
+POINT_CONV = "< :: >\n= :: =\n> :: <\n"
+POINT_COMP = (
+    "< : < :: ( < )\n< : = :: ( < )\n< : > :: ( < = > )\n"
+    "= : < :: ( < )\n= : = :: ( = )\n= : > :: ( > )\n"
+    "> : < :: ( < = > )\n> : = :: ( > )\n> : > :: ( > )\n"
+)
+
+
+def _gqr_point_dir(tmp_path):
+    (tmp_path / "point" / "calculus").mkdir(parents=True)
+    (tmp_path / "point" / "calculus" / "point.conv").write_text(POINT_CONV)
+    (tmp_path / "point" / "calculus" / "point.comp").write_text(POINT_COMP)
+    spec = tmp_path / "point.spec"
+    spec.write_text(
+        "comp_table_file point/calculus/point.comp\nconverse_file point/calculus/point.conv\n"
+        "identity =\ncalculus_size 3\n"
+    )
+    return spec
+
+
+def test_algebra_from_gqr_closes_solves_and_reads_csp(tmp_path):
+    pa = qrm.reason.Algebra.from_gqr(_gqr_point_dir(tmp_path))
+    assert (pa.name, pa.labels, pa.identity) == ("point", ["<", "=", ">"], "=")
+    assert all(holds for _, holds, _ in pa.laws())
+    r = qrm.reason.close_binary(pa, [("a", "b", ["<"]), ("b", "c", ["<", "="])])
+    assert r.consistent and r.constraints[("a", "c")] == ["<"]
+    cyc = [("a", "b", ["<"]), ("b", "c", ["<"]), ("c", "a", ["<", "="])]
+    assert not qrm.reason.close_binary(pa, cyc).consistent
+    s = qrm.reason.consistency(pa, [("a", "b", ["<", "="]), ("b", "c", ["<", "="]), ("a", "c", ["=", ">"])])
+    assert s.status == "consistent"
+    assert s.constraints == {("a", "b"): ["="], ("a", "c"): ["="], ("b", "c"): ["="]}
+    assert qrm.reason.consistency(pa, cyc).status == "inconsistent"
+    nets = qrm.reason.read_csp(pa, "1 #one\n0 1 ( < = )\n.\n2 #two\n0 2 ( > )\n.\n")
+    assert nets == [("one", [("0", "1", ["<", "="])]), ("two", [("0", "2", [">"])])]
+    # A loaded algebra pickles as its tables.
+    again = pickle.loads(pickle.dumps(pa))
+    assert again.labels == pa.labels and again.to_gqr_tables() == pa.to_gqr_tables()
+
+
+def test_algebra_errors_are_typed_and_name_the_place(tmp_path):
+    spec = _gqr_point_dir(tmp_path)
+    (tmp_path / "point" / "calculus" / "point.comp").write_text(POINT_COMP.replace("( = )", "( == )"))
+    with pytest.raises(qrm.SpecError, match="line 5.*`==` is not a base relation"):
+        qrm.reason.Algebra.from_gqr(spec)
+    with pytest.raises(qrm.IoError):
+        qrm.reason.Algebra.from_gqr(tmp_path / "missing.spec")
+    pa = qrm.reason.Algebra.from_gqr_tables("point", POINT_CONV, POINT_COMP, "=")
+    with pytest.raises(qrm.FormatError, match="line 2"):
+        qrm.reason.read_csp(pa, "1 #x\n0 5 ( < )\n")
+    with pytest.raises(qrm.InvalidInput, match="BinaryCalculus or a BinaryAlgebra"):
+        qrm.reason.close_binary("point", [])  # type: ignore[arg-type]
+
+
+def test_a_derived_calculus_is_an_algebra_too():
+    opra = qrm.BinaryCalculus.builtin("opra-1")
+    alg = qrm.reason.Algebra.of(opra)
+    laws = dict((law, holds) for law, holds, _ in alg.laws())
+    assert laws["composition is associative ((r∘s)∘t = r∘(s∘t))"] is False
+    conv, comp, weights, spec = alg.to_gqr_tables()
+    assert "0_0 : 0_0 :: (" in comp and "identity s_0" in spec
+    same = qrm.reason.close_binary(alg, [("A", "B", ["0_0"]), ("B", "C", ["0_0"])])
+    assert same.constraints[("A", "C")] == ["0_2", "2_0", "s_0"]
+    budget = qrm.reason.consistency(opra, [("A", "B", ["0_0", "1_1"]), ("B", "C", ["0_0", "1_3"])], max_nodes=1)
+    assert budget.status == "unknown"

@@ -10,7 +10,10 @@
 use std::path::Path;
 
 use pqrm::loaders::{RangeBearingNoise, parse_csv, parse_g2o, parse_truth_csv, read_mrclam};
-use qsr_core::binary::{BinaryCalculus, BinaryNetwork, close_binary};
+use qsr_core::binary::{
+    BinaryAlgebra, BinaryCalculus, BinaryNetwork, SolveOptions, close_binary, from_gqr_csp_str,
+    solve_binary,
+};
 use qsr_core::reason::{Algebra, Network, TableScope, close};
 use qsr_core::{Calculus, Point2};
 
@@ -18,7 +21,7 @@ use qsr_core::{Calculus, Point2};
 pub type Target = fn(&[u8]);
 
 /// Every target by name (the names of `fuzz/fuzz_targets/*.rs` and `fuzz/corpus/*/`).
-pub const TARGETS: [(&str, Target); 14] = [
+pub const TARGETS: [(&str, Target); 15] = [
     ("spec_toml", spec_toml),
     ("spec_json", spec_json),
     ("classify_row", classify_row),
@@ -32,6 +35,7 @@ pub const TARGETS: [(&str, Target); 14] = [
     ("prob_line", prob_line),
     ("network", network),
     ("binary_network", binary_network),
+    ("calculus_tables", calculus_tables),
     ("mcap", mcap),
 ];
 
@@ -266,12 +270,43 @@ pub fn binary_network(data: &[u8]) {
         return;
     };
     let parsed = match t.trim_start().chars().next() {
-        Some('{') => BinaryNetwork::from_json_str(&c, t),
-        _ => BinaryNetwork::from_sparq_str(&c, t),
+        Some('{') => BinaryNetwork::from_json_str(&c, t).map(|n| vec![n]),
+        Some(d) if d.is_ascii_digit() || d == '#' => {
+            from_gqr_csp_str(&c, t).map(|v| v.into_iter().map(|g| g.network).collect())
+        }
+        _ => BinaryNetwork::from_sparq_str(&c, t).map(|n| vec![n]),
     };
-    if let Ok(net) = parsed
-        && net.n_points() <= CLOSE_POINTS
-    {
-        let _ = close_binary(net);
+    for net in parsed.unwrap_or_default() {
+        if net.n_points() <= CLOSE_POINTS {
+            let _ = close_binary(net.clone());
+            let _ = solve_binary(net, &SolveOptions { max_nodes: 200 });
+        }
     }
+}
+
+/// A binary calculus's tables: GQR's converse and composition texts (split at a line `%%`,
+/// the identity the first converse line's relation) or a SparQ definition; its laws checked
+/// and a small network closed and solved when it loads.
+pub fn calculus_tables(data: &[u8]) {
+    let Some(t) = text(data) else { return };
+    let loaded = match t.split_once("\n%%\n") {
+        Some((conv, comp)) => {
+            let identity = conv.split("::").next().unwrap_or("").trim();
+            BinaryAlgebra::from_gqr_tables("fuzz", conv, comp, identity, None)
+        }
+        None => BinaryAlgebra::from_sparq_str(t),
+    };
+    let Ok(alg) = loaded else { return };
+    if alg.n_states() > 64 {
+        return;
+    }
+    let _ = alg.check();
+    let _ = alg.to_gqr_tables();
+    let Ok(mut net) = BinaryNetwork::universal(&alg, ["A", "B", "C", "D"]) else {
+        return;
+    };
+    let first = qsr_core::reason::StateSet::from_states(alg.n_states(), alg.states().take(1));
+    net.constrain(0, 1, &first);
+    let _ = close_binary(net.clone());
+    let _ = solve_binary(net, &SolveOptions { max_nodes: 200 });
 }

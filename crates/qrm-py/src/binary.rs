@@ -120,11 +120,11 @@ impl BinaryCalculus {
 #[pyfunction]
 pub(crate) fn reason_close_binary(
     py: Python<'_>,
-    calculus: &BinaryCalculus,
+    calculus: &Bound<'_, PyAny>,
     constraints: Vec<(String, String, Vec<String>)>,
 ) -> PyResult<String> {
-    let c = &calculus.inner;
-    let net = BinaryNetwork::from_constraints(c, &constraints).map_err(qsr)?;
+    let a = algebra_of(calculus)?;
+    let net = BinaryNetwork::from_constraints(&a, &constraints).map_err(qsr)?;
     let closed = crate::pool::detach(py, || close_binary(net)).map_err(qsr)?;
     Ok(serde_json::json!({
         "consistent": closed.is_consistent(),
@@ -132,4 +132,195 @@ pub(crate) fn reason_close_binary(
         "explanation": closed.describe(),
     })
     .to_string())
+}
+
+/// One law of a relation algebra: its statement, whether it holds (None: not checked), and
+/// a witness where it fails.
+type LawRow = (String, Option<bool>, Option<String>);
+
+/// A binary calculus's reasoning tables, derived (OPRA-m, STAR-m) or read from GQR's or
+/// SparQ's files (RCC-8, Allen, the point algebra, ...).
+#[pyclass(module = "qrm", frozen, from_py_object)]
+#[derive(Clone)]
+pub(crate) struct BinaryAlgebra {
+    pub(crate) inner: qsr_core::binary::BinaryAlgebra,
+}
+
+#[pymethods]
+impl BinaryAlgebra {
+    /// A GQR calculus: its `.spec` file (tables relative to the spec's directory).
+    #[staticmethod]
+    fn from_gqr(path: std::path::PathBuf) -> PyResult<Self> {
+        Ok(Self {
+            inner: qsr_core::binary::BinaryAlgebra::from_gqr_spec(&path).map_err(qsr)?,
+        })
+    }
+
+    /// A SparQ `def-calculus` file (binary calculi).
+    #[staticmethod]
+    fn from_sparq(path: std::path::PathBuf) -> PyResult<Self> {
+        Ok(Self {
+            inner: qsr_core::binary::BinaryAlgebra::from_sparq_file(&path).map_err(qsr)?,
+        })
+    }
+
+    /// Tables as the texts of GQR's files.
+    #[staticmethod]
+    #[pyo3(signature = (name, converse, composition, identity, weights = None))]
+    fn from_gqr_tables(
+        name: &str,
+        converse: &str,
+        composition: &str,
+        identity: &str,
+        weights: Option<&str>,
+    ) -> PyResult<Self> {
+        Ok(Self {
+            inner: qsr_core::binary::BinaryAlgebra::from_gqr_tables(
+                name,
+                converse,
+                composition,
+                identity,
+                weights,
+            )
+            .map_err(qsr)?,
+        })
+    }
+
+    /// The algebra of a built-in binary calculus.
+    #[staticmethod]
+    fn of(calculus: &BinaryCalculus) -> Self {
+        Self {
+            inner: qsr_core::binary::AsBinaryAlgebra::binary_algebra(&calculus.inner),
+        }
+    }
+
+    #[getter]
+    fn name(&self) -> String {
+        self.inner.name().to_owned()
+    }
+
+    #[getter]
+    fn labels(&self) -> Vec<String> {
+        self.inner.labels().to_vec()
+    }
+
+    #[getter]
+    fn n_states(&self) -> usize {
+        self.inner.n_states()
+    }
+
+    #[getter]
+    fn identity(&self) -> Option<String> {
+        self.inner
+            .identity()
+            .map(|i| self.inner.label(i).to_owned())
+    }
+
+    /// Which laws of a relation algebra the tables obey: `[(law, holds, witness), ...]`;
+    /// `holds` is None when not checked.
+    fn laws(&self, py: Python<'_>) -> PyResult<Vec<LawRow>> {
+        let a = &self.inner;
+        let check = crate::pool::detach(py, || a.check()).map_err(qsr)?;
+        Ok(check
+            .laws
+            .into_iter()
+            .map(|l| (l.law.describe().to_owned(), l.holds, l.witness))
+            .collect())
+    }
+
+    /// The tables in GQR's text forms: `(converse, composition, weights, spec)`.
+    fn to_gqr_tables(&self) -> PyResult<(String, String, String, String)> {
+        let t = self.inner.to_gqr_tables().map_err(qsr)?;
+        Ok((t.converse, t.composition, t.weights, t.spec))
+    }
+
+    /// Pickles as its tables (a loaded calculus has no name to look up).
+    #[allow(clippy::type_complexity)]
+    fn __reduce__<'py>(
+        slf: &Bound<'py, Self>,
+    ) -> PyResult<(Bound<'py, PyAny>, (String, String, String, String, String))> {
+        let a = &slf.get().inner;
+        let t = a.to_gqr_tables().map_err(qsr)?;
+        let identity = a
+            .identity()
+            .map(|i| a.label(i).to_owned())
+            .unwrap_or_default();
+        let ctor = slf.get_type().getattr("from_gqr_tables")?;
+        Ok((
+            ctor,
+            (
+                a.name().to_owned(),
+                t.converse,
+                t.composition,
+                identity,
+                t.weights,
+            ),
+        ))
+    }
+
+    fn __repr__(&self) -> String {
+        format!(
+            "BinaryAlgebra('{}', {} relations)",
+            self.inner.name(),
+            self.inner.n_states()
+        )
+    }
+}
+
+/// The algebra of a `BinaryCalculus` or a `BinaryAlgebra`.
+fn algebra_of(calculus: &Bound<'_, PyAny>) -> PyResult<qsr_core::binary::BinaryAlgebra> {
+    if let Ok(c) = calculus.extract::<BinaryCalculus>() {
+        return Ok(qsr_core::binary::AsBinaryAlgebra::binary_algebra(&c.inner));
+    }
+    if let Ok(a) = calculus.extract::<BinaryAlgebra>() {
+        return Ok(a.inner);
+    }
+    Err(invalid(format!(
+        "calculus: a BinaryCalculus or a BinaryAlgebra, not {}",
+        calculus.get_type().name()?
+    )))
+}
+
+/// Consistency of a binary network by search (GQR's `consistency`); returns JSON
+/// `{"status": "consistent" | "inconsistent" | "unknown", "constraints", "nodes"}`.
+#[pyfunction]
+#[pyo3(signature = (calculus, constraints, *, max_nodes = 1_000_000))]
+pub(crate) fn reason_solve_binary(
+    py: Python<'_>,
+    calculus: &Bound<'_, PyAny>,
+    constraints: Vec<(String, String, Vec<String>)>,
+    max_nodes: u64,
+) -> PyResult<String> {
+    use qsr_core::binary::{SolveOptions, SolveOutcome, solve_binary};
+    let a = algebra_of(calculus)?;
+    let net = BinaryNetwork::from_constraints(&a, &constraints).map_err(qsr)?;
+    let solved =
+        crate::pool::detach(py, || solve_binary(net, &SolveOptions { max_nodes })).map_err(qsr)?;
+    let (status, constraints) = match &solved.outcome {
+        SolveOutcome::Consistent(s) => ("consistent", Some(s.constraints_json())),
+        SolveOutcome::Inconsistent => ("inconsistent", None),
+        SolveOutcome::Unknown => ("unknown", None),
+    };
+    Ok(
+        serde_json::json!({"status": status, "constraints": constraints, "nodes": solved.nodes})
+            .to_string(),
+    )
+}
+
+/// The networks of a GQR `.csp` text: JSON `[{"name", "points", "constraints"}, ...]`.
+#[pyfunction]
+pub(crate) fn reason_read_csp(calculus: &Bound<'_, PyAny>, text: &str) -> PyResult<String> {
+    let a = algebra_of(calculus)?;
+    let nets = qsr_core::binary::from_gqr_csp_str(&a, text).map_err(qsr)?;
+    let out: Vec<serde_json::Value> = nets
+        .iter()
+        .map(|g| {
+            serde_json::json!({
+                "name": g.name,
+                "points": g.network.names(),
+                "constraints": g.network.constraints_json(),
+            })
+        })
+        .collect();
+    Ok(serde_json::Value::Array(out).to_string())
 }

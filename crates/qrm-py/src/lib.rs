@@ -32,6 +32,9 @@ fn _qrm(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<calculus::Calculus>()?;
     m.add_class::<binary::BinaryCalculus>()?;
     m.add_function(wrap_pyfunction!(binary::reason_close_binary, m)?)?;
+    m.add_class::<binary::BinaryAlgebra>()?;
+    m.add_function(wrap_pyfunction!(binary::reason_solve_binary, m)?)?;
+    m.add_function(wrap_pyfunction!(binary::reason_read_csp, m)?)?;
     m.add_class::<mapping::Pqrm>()?;
     m.add_function(wrap_pyfunction!(study_runner::studies_list, m)?)?;
     m.add_function(wrap_pyfunction!(study_runner::studies_config, m)?)?;

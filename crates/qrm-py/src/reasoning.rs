@@ -19,6 +19,8 @@ fn load(
     let scope = if general_position {
         TableScope::GeneralPosition
     } else {
+        // The sound tables from the disk cache (derived and written on the first use).
+        c.load_or_derive_cached().map_err(qsr)?;
         TableScope::Sound
     };
     let alg = Algebra::of(c, scope).map_err(qsr)?;

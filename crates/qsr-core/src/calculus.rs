@@ -435,6 +435,24 @@ impl Calculus {
             .get_or_init(|| PermutationTable::compute(self, op, true)))
     }
 
+    /// Whether the sound composition and every permutation table are in memory.
+    pub(crate) fn has_reasoning_tables(&self) -> bool {
+        self.derived.compose.get().is_some()
+            && self.derived.permutations.iter().all(|p| p.get().is_some())
+    }
+
+    /// Installs tables read from the cache (ignored where a table is already derived).
+    pub(crate) fn seed_reasoning_tables(
+        &self,
+        compose: ComposeTable,
+        permutations: Vec<PermutationTable>,
+    ) {
+        let _ = self.derived.compose.set(compose);
+        for table in permutations {
+            let _ = self.derived.permutations[table.op() as usize].set(table);
+        }
+    }
+
     /// A permutation table, with (`boundaries = true`, as [`Calculus::permutation`]) or
     /// without configurations that have a point exactly on a boundary (not cached).
     ///
@@ -510,7 +528,7 @@ impl Calculus {
         Self::from_spec(spec)
     }
 
-    fn require_ternary(&self, operation: &str) -> Result<()> {
+    pub(crate) fn require_ternary(&self, operation: &str) -> Result<()> {
         if self.frame() == FrameKind::Ternary {
             Ok(())
         } else {

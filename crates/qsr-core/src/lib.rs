@@ -84,6 +84,7 @@ mod sampled;
 mod spec;
 mod state;
 pub mod stats;
+pub mod table_cache;
 pub mod table_text;
 pub mod text_file;
 

@@ -77,3 +77,32 @@ pub fn read_bytes(path: &Path, max_bytes: u64) -> std::io::Result<Vec<u8>> {
     }
     Ok(bytes)
 }
+
+/// A value quoted in an error message: whole when short, else its first 60 characters and
+/// how long it was (a 2 MB name must not become 2 MB of stderr).
+#[must_use]
+pub fn shorten(value: &str) -> String {
+    const KEEP: usize = 60;
+    match value.char_indices().nth(KEEP) {
+        None => value.to_owned(),
+        Some((cut, _)) => format!("{}… ({} bytes)", &value[..cut], value.len()),
+    }
+}
+
+/// Writes `bytes` to `path` whole or not at all: beside it under a name of this process, then
+/// renamed over it (a reader never sees half a file); makes the parent directory.
+///
+/// # Errors
+/// The I/O error of creating, writing or renaming.
+pub fn write_whole(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
+    if let Some(parent) = path.parent() {
+        std::fs::create_dir_all(parent)?;
+    }
+    let mut tmp = path.as_os_str().to_owned();
+    tmp.push(format!(".tmp{}", std::process::id()));
+    let tmp = std::path::PathBuf::from(tmp);
+    std::fs::write(&tmp, bytes)?;
+    std::fs::rename(&tmp, path).inspect_err(|_| {
+        let _ = std::fs::remove_file(&tmp);
+    })
+}

@@ -417,3 +417,59 @@ fn malformed_networks_name_the_place_and_the_cause() {
         Err(QsrError::Unsupported { .. })
     ));
 }
+
+#[test]
+fn ternary_tables_are_cached_on_disk_and_a_damaged_cache_is_derived_again() {
+    use qsr_core::binary::CacheOutcome;
+    let dir = std::env::temp_dir().join(format!("qrm-ternary-cache-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let fresh =
+        || Calculus::from_spec(Calculus::builtin("double-cross").unwrap().spec().clone()).unwrap();
+    let first = fresh();
+    let written = first.load_or_derive_tables(&dir).unwrap();
+    let CacheOutcome::Written(path) = written else {
+        panic!("{written:?}")
+    };
+    // A new calculus of the same spec reads the same tables.
+    let second = fresh();
+    assert_eq!(
+        second.load_or_derive_tables(&dir).unwrap(),
+        CacheOutcome::Loaded(path.clone())
+    );
+    let (a, b) = (
+        first.compose_table().unwrap(),
+        second.compose_table().unwrap(),
+    );
+    for r in first.states() {
+        for s in first.states() {
+            assert_eq!(a.get(r, s), b.get(r, s));
+        }
+    }
+    for op in qsr_core::Permutation::ALL {
+        assert_eq!(
+            first.permutation(op).unwrap(),
+            second.permutation(op).unwrap()
+        );
+    }
+    // One changed digit still parses; the checksum refuses it and the tables are derived anew.
+    let text = std::fs::read_to_string(&path).unwrap();
+    let at = text.find("\"compose\":[[[").unwrap() + "\"compose\":[[[".len();
+    let digit = text[at..].chars().next().unwrap();
+    let flipped = if digit == '1' { '2' } else { '1' };
+    let damaged = format!("{}{flipped}{}", &text[..at], &text[at + 1..]);
+    std::fs::write(&path, damaged).unwrap();
+    let third = fresh();
+    let outcome = third.load_or_derive_tables(&dir).unwrap();
+    assert!(
+        matches!(&outcome, CacheOutcome::Derived(why) if why.contains("checksum")),
+        "{outcome:?}"
+    );
+    assert_eq!(
+        third
+            .compose_table()
+            .unwrap()
+            .get(qsr_core::StateId(0), qsr_core::StateId(0)),
+        a.get(qsr_core::StateId(0), qsr_core::StateId(0))
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}

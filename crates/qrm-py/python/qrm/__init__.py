@@ -25,6 +25,7 @@ import json
 from typing import Any, Callable, Dict, List, Mapping, Optional, Protocol, Sequence, Tuple, Union, cast
 
 from ._qrm import (
+    BinaryAlgebra,
     BinaryCalculus,
     Calculus,
     DegenerateFrame,
@@ -45,6 +46,7 @@ from ._qrm import (
 from . import _qrm, reason, sim, types
 
 __all__ = [
+    "BinaryAlgebra",
     "BinaryCalculus",
     "Calculus",
     "DegenerateFrame",

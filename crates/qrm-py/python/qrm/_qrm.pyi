@@ -47,6 +47,9 @@ __all__ = [
     "reason_close",
     "reason_scenario",
     "reason_close_binary",
+    "BinaryAlgebra",
+    "reason_solve_binary",
+    "reason_read_csp",
     "__version__",
 ]
 
@@ -77,8 +80,15 @@ def reason_scenario(
     calculus: Calculus, network: str, *, general_position: bool = False, max_nodes: int = 100000
 ) -> str: ...
 def reason_close_binary(
-    calculus: BinaryCalculus, constraints: List[Tuple[str, str, List[str]]]
+    calculus: Union[BinaryCalculus, BinaryAlgebra], constraints: List[Tuple[str, str, List[str]]]
 ) -> str: ...
+def reason_solve_binary(
+    calculus: Union[BinaryCalculus, BinaryAlgebra],
+    constraints: List[Tuple[str, str, List[str]]],
+    *,
+    max_nodes: int = 1000000,
+) -> str: ...
+def reason_read_csp(calculus: Union[BinaryCalculus, BinaryAlgebra], text: str) -> str: ...
 def worker_threads() -> int:
     """Worker threads of this process's (fork-safe) thread pool."""
 
@@ -140,6 +150,33 @@ class BinaryCalculus:
     def render_svg(self, *, width: int = 640) -> str: ...
     def _repr_svg_(self) -> str: ...
     def __reduce__(self) -> Tuple[Callable[..., BinaryCalculus], Tuple[str]]: ...
+
+@final
+class BinaryAlgebra:
+    """A binary calculus's reasoning tables, derived or read from GQR's or SparQ's files."""
+    @staticmethod
+    def from_gqr(path: Union[str, os.PathLike[str]]) -> BinaryAlgebra: ...
+    @staticmethod
+    def from_sparq(path: Union[str, os.PathLike[str]]) -> BinaryAlgebra: ...
+    @staticmethod
+    def from_gqr_tables(
+        name: str, converse: str, composition: str, identity: str, weights: Optional[str] = None
+    ) -> BinaryAlgebra: ...
+    @staticmethod
+    def of(calculus: BinaryCalculus) -> BinaryAlgebra: ...
+    @property
+    def name(self) -> str: ...
+    @property
+    def labels(self) -> List[str]: ...
+    @property
+    def n_states(self) -> int: ...
+    @property
+    def identity(self) -> Optional[str]: ...
+    def laws(self) -> List[Tuple[str, Optional[bool], Optional[str]]]: ...
+    def to_gqr_tables(self) -> Tuple[str, str, str, str]: ...
+    def __reduce__(
+        self,
+    ) -> Tuple[Callable[..., BinaryAlgebra], Tuple[str, str, str, str, str]]: ...
 
 @final
 class Pqrm:

@@ -16,18 +16,51 @@ Binary calculi (OPRA-m, STAR-m) close networks of pairs ``(A, B, [labels])``:
 >>> r.consistent, r.constraints[("A", "C")]
 (True, ['0_2', '2_0', 's_0'])
 
+Any binary calculus GQR or SparQ defines is an `Algebra` read from its files (RCC-8, Allen's
+interval algebra, the point algebra, cardinal directions, ...), closed and solved the same way;
+GQR's ``.csp`` networks are read by `read_csp`:
+
+>>> pa = qrm.reason.Algebra.from_gqr_tables(
+...     "point", "< :: >\\n= :: =\\n> :: <\\n",
+...     "< : < :: ( < )\\n< : = :: ( < )\\n< : > :: ( < = > )\\n"
+...     "= : < :: ( < )\\n= : = :: ( = )\\n= : > :: ( > )\\n"
+...     "> : < :: ( < = > )\\n> : = :: ( > )\\n> : > :: ( > )\\n", "=")
+>>> [(name, len(c)) for name, c in qrm.reason.read_csp(pa, "2 #chain\\n0 1 ( < )\\n1 2 ( < )\\n.\\n")]
+[('chain', 2)]
+>>> qrm.reason.close_binary(pa, [("a", "b", ["<"]), ("b", "c", ["<"])]).constraints[("a", "c")]
+['<']
+>>> qrm.reason.consistency(pa, [("a", "b", ["<", "="]), ("b", "a", ["<", "="])]).status
+'consistent'
+
 Probabilistic reasoning over maps lives on the map: ``Pqrm.infer`` and ``Pqrm.check``.
 """
 from __future__ import annotations
 
 import json
 from dataclasses import dataclass
-from typing import Dict, Iterable, List, Optional, Sequence, Tuple
+from typing import Dict, Iterable, List, Optional, Sequence, Tuple, Union
 
 from . import _qrm
-from ._qrm import BinaryCalculus, Calculus
+from ._qrm import BinaryAlgebra, BinaryCalculus, Calculus
 
-__all__ = ["BinaryClosure", "Closure", "Pair", "Triplet", "close", "close_binary", "scenario"]
+Algebra = BinaryAlgebra
+"""A binary calculus's tables: ``Algebra.from_gqr("rcc8.spec")``, ``Algebra.from_sparq(path)``,
+``Algebra.of(BinaryCalculus.builtin("opra-2"))``; ``laws()`` says which relation-algebra laws
+they obey."""
+
+__all__ = [
+    "Algebra",
+    "BinaryClosure",
+    "BinarySolution",
+    "Closure",
+    "Pair",
+    "Triplet",
+    "close",
+    "close_binary",
+    "consistency",
+    "read_csp",
+    "scenario",
+]
 
 Triplet = Tuple[str, str, str]
 Pair = Tuple[str, str]
@@ -109,13 +142,62 @@ class BinaryClosure:
 
 
 def close_binary(
-    calculus: BinaryCalculus, constraints: Iterable[Tuple[str, str, Sequence[str]]]
+    calculus: Union[BinaryCalculus, BinaryAlgebra],
+    constraints: Iterable[Tuple[str, str, Sequence[str]]],
 ) -> BinaryClosure:
-    """Algebraic closure (path consistency) of a binary network with the calculus's exact
-    tables; ``(A, B, labels)`` says the relation of B as seen from A is one of ``labels``."""
+    """Algebraic closure (path consistency, as GQR runs it) of a binary network;
+    ``(A, B, labels)`` says the relation of B as seen from A is one of ``labels``."""
     rows = [(str(a), str(b), [str(x) for x in labels]) for a, b, labels in constraints]
     out = json.loads(_qrm.reason_close_binary(calculus, rows))
     pairs: Dict[Pair, List[str]] = {
         (str(a), str(b)): [str(x) for x in labels] for a, b, labels in out["constraints"]
     }
     return BinaryClosure(out["consistent"], pairs, out["explanation"])
+
+
+def _pairs(rows: Optional[List[List[object]]]) -> Dict[Pair, List[str]]:
+    out: Dict[Pair, List[str]] = {}
+    for a, b, labels in rows or []:
+        assert isinstance(labels, list)
+        out[(str(a), str(b))] = [str(x) for x in labels]
+    return out
+
+
+@dataclass(frozen=True)
+class BinarySolution:
+    """The result of `consistency`."""
+
+    status: str
+    """``"consistent"``, ``"inconsistent"``, or ``"unknown"`` when the node budget ran out."""
+    constraints: Dict[Pair, List[str]]
+    """The scenario found (one relation per pair), else empty."""
+    nodes: int
+    """Search nodes used."""
+
+
+def consistency(
+    calculus: Union[BinaryCalculus, BinaryAlgebra],
+    constraints: Iterable[Tuple[str, str, Sequence[str]]],
+    *,
+    max_nodes: int = 1_000_000,
+) -> BinarySolution:
+    """Consistency by backtracking search with path consistency at every node (GQR's
+    ``consistency``): an atomic path-consistent refinement, none, or ``"unknown"``."""
+    rows = [(str(a), str(b), [str(x) for x in labels]) for a, b, labels in constraints]
+    out = json.loads(_qrm.reason_solve_binary(calculus, rows, max_nodes=max_nodes))
+    return BinarySolution(str(out["status"]), _pairs(out["constraints"]), int(out["nodes"]))
+
+
+def read_csp(
+    calculus: Union[BinaryCalculus, BinaryAlgebra], text: str
+) -> List[Tuple[str, List[Tuple[str, str, List[str]]]]]:
+    """The networks of a GQR ``.csp`` text, each ``(name, [(A, B, labels), ...])`` with points
+    named ``"0"``, ``"1"``, ... (a pair listed once, not universal)."""
+    nets = json.loads(_qrm.reason_read_csp(calculus, text))
+    return [
+        (
+            str(n["name"]),
+            [(str(a), str(b), [str(x) for x in labels]) for a, b, labels in n["constraints"]],
+        )
+        for n in nets
+    ]

@@ -129,15 +129,7 @@ fn write(c: &BinaryCalculus, t: &BinaryTables, path: &Path) -> std::io::Result<(
             .collect(),
     };
     let text = serde_json::to_vec(&file).map_err(std::io::Error::other)?;
-    if let Some(parent) = path.parent() {
-        std::fs::create_dir_all(parent)?;
-    }
-    // Write beside, then rename: a reader never sees half a file.
-    let tmp = path.with_extension(format!("json.tmp{}", std::process::id()));
-    std::fs::write(&tmp, text)?;
-    std::fs::rename(&tmp, path).inspect_err(|_| {
-        let _ = std::fs::remove_file(&tmp);
-    })
+    crate::text_file::write_whole(path, &text)
 }
 
 impl BinaryCalculus {

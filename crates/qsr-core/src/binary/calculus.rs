@@ -63,6 +63,8 @@ pub(super) struct Derived {
     pub(super) converse: OnceLock<ConverseTable>,
     pub(super) compose: OnceLock<ComposeTable>,
     neighbours: OnceLock<NeighbourGraph>,
+    /// The calculus's reasoning tables (shared by its clones and its networks).
+    pub(super) algebra: OnceLock<super::algebra::BinaryAlgebra>,
 }
 
 /// What deriving a table would take, estimated before starting.

@@ -30,7 +30,14 @@
 //! - [`ConverseTable`]: `X r Y ⇒ Y conv(r) X`; composition reuses [`crate::ComposeTable`].
 //! - the on-disk table cache ([`BinaryCalculus::load_or_derive_tables`], [`CacheOutcome`],
 //!   [`default_cache_dir`]).
-//! - [`BinaryNetwork`] and [`close_binary`]: algebraic closure of binary networks.
+//! - [`BinaryAlgebra`]: the tables reasoning needs, derived ([`BinaryAlgebra::of`]) or read
+//!   from GQR's `.spec` and SparQ's `def-calculus` files (RCC-8, Allen, the point algebra,
+//!   cardinal directions, …), with [`BinaryAlgebra::check`] saying which algebraic laws they
+//!   obey.
+//! - [`BinaryNetwork`]: a network over an algebra, in SparQ's text, JSON or GQR's `.csp`
+//!   ([`from_gqr_csp_str`], [`BinaryNetwork::to_gqr_csp`]).
+//! - [`close_binary`]: path consistency (PC-2 over block tables of set composition);
+//!   [`solve_binary`]: consistency by search, with a node budget.
 //! - [`render_binary_svg`]: a picture of the partition of directions.
 //!
 //! ## Naming rule
@@ -38,23 +45,35 @@
 //! (`converse`, `compose_table`, `neighbours`), `classify*` for configurations → relations,
 //! `from_*`/`to_*` for conversions, verbs for operations (`close_binary`).
 
+mod algebra;
+mod algebra_check;
 mod cache;
 mod calculus;
+mod closure;
+mod consistency;
+mod csp;
 mod derive;
 mod direction;
+mod edge_queue;
 mod network;
 mod picture;
 mod relations;
+mod set_ops;
+mod table_files;
 
+pub use algebra::{AsBinaryAlgebra, BinaryAlgebra, MAX_LOADED_RELATIONS};
+pub use algebra_check::{AlgebraCheck, AlgebraLaw, LawVerdict, MAX_ASSOCIATIVITY_CHECK};
+pub(crate) use cache::fnv1a;
 pub use cache::{CacheOutcome, cache_path, default_cache_dir};
 pub use calculus::{
     BINARY_NAMES, BinaryCalculus, BinaryFamily, DerivationCost, MAX_DERIVATION_STEPS, MAX_OPRA_M,
     MAX_STAR_M, MAX_TABLE_BYTES, is_binary_name,
 };
+pub use closure::{BinaryClosure, BinaryContradiction, close_binary};
+pub use consistency::{BinarySolution, SolveOptions, SolveOutcome, solve_binary};
+pub use csp::{GqrNetwork, from_gqr_csp_str};
 pub use derive::ConverseTable;
 pub use direction::{DirectionPartition, RAY_TOLERANCE, TICKS_PER_UNIT};
-pub use network::{
-    BinaryClosure, BinaryContradiction, BinaryNetwork, MAX_BINARY_POINTS, close_binary,
-    relation_set,
-};
+pub use network::{BinaryNetwork, MAX_BINARY_POINTS, relation_set};
 pub use picture::render_binary_svg;
+pub use table_files::GqrTables;

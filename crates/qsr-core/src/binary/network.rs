@@ -1,10 +1,12 @@
-//! [`BinaryNetwork`]: a set of relations for every ordered pair of named points, and its
-//! algebraic closure ([`close_binary`]) — path consistency as SparQ and GQR run it.
+//! [`BinaryNetwork`]: a set of relations for every ordered pair of named points, over a
+//! [`BinaryAlgebra`]; read from SparQ's text, JSON or GQR's `.csp` ([`super::csp`]), closed
+//! by [`super::close_binary`].
 
 use std::collections::HashMap;
 
 use nalgebra::Point2;
 
+use super::algebra::{AsBinaryAlgebra, BinaryAlgebra};
 use super::calculus::BinaryCalculus;
 use crate::calculus::StateId;
 use crate::error::QsrError;
@@ -16,6 +18,9 @@ pub const MAX_BINARY_POINTS: usize = 4096;
 
 /// A binary constraint network over named points: `get(i, j)` is the set of relations
 /// possible between point `i` and point `j`; `(j, i)` always holds the converse.
+///
+/// Networks are over a [`BinaryAlgebra`]; every constructor takes a derived calculus or a
+/// loaded algebra alike ([`AsBinaryAlgebra`]).
 ///
 /// ```
 /// use qsr_core::binary::{BinaryCalculus, BinaryNetwork, close_binary};
@@ -34,7 +39,7 @@ pub const MAX_BINARY_POINTS: usize = 4096;
 /// ```
 #[derive(Debug, Clone, PartialEq)]
 pub struct BinaryNetwork {
-    calculus: BinaryCalculus,
+    algebra: BinaryAlgebra,
     names: Vec<String>,
     words: usize,
     sets: Vec<u64>,
@@ -47,9 +52,10 @@ impl BinaryNetwork {
     /// [`QsrError::Network`] for an empty or repeated name or more than
     /// [`MAX_BINARY_POINTS`] points.
     pub fn universal<S: Into<String>>(
-        calculus: &BinaryCalculus,
+        algebra: &impl AsBinaryAlgebra,
         names: impl IntoIterator<Item = S>,
     ) -> crate::Result<Self> {
+        let algebra = algebra.binary_algebra();
         let names: Vec<String> = names.into_iter().map(Into::into).collect();
         if names.len() > MAX_BINARY_POINTS {
             return Err(network_error(
@@ -73,14 +79,11 @@ impl BinaryNetwork {
             }
         }
         let n = names.len();
-        let words = calculus.n_states().div_ceil(64);
-        let universal = StateSet::universal(calculus.n_states());
-        let mut sets = Vec::with_capacity(n * n * words);
-        for _ in 0..n * n {
-            sets.extend_from_slice(universal.words());
-        }
+        let words = algebra.n_states().div_ceil(64);
+        let universal = StateSet::universal(algebra.n_states());
+        let sets = universal.words().repeat(n * n);
         Ok(Self {
-            calculus: calculus.clone(),
+            algebra,
             names,
             words,
             sets,
@@ -122,7 +125,8 @@ impl BinaryNetwork {
     ///
     /// # Errors
     /// [`QsrError::Network`] with the line and column of the offending token.
-    pub fn from_sparq_str(calculus: &BinaryCalculus, text: &str) -> crate::Result<Self> {
+    pub fn from_sparq_str(algebra: &impl AsBinaryAlgebra, text: &str) -> crate::Result<Self> {
+        let calculus = &algebra.binary_algebra();
         let expr = sexpr::parse(text)?;
         let list = expr.as_list().ok_or_else(|| {
             network_error("line 1", "expected a list of constraints ((A r B) ...)")
@@ -157,7 +161,8 @@ impl BinaryNetwork {
     ///
     /// # Errors
     /// [`QsrError::Network`] naming the constraint by position and what is wrong with it.
-    pub fn from_json_str(calculus: &BinaryCalculus, text: &str) -> crate::Result<Self> {
+    pub fn from_json_str(algebra: &impl AsBinaryAlgebra, text: &str) -> crate::Result<Self> {
+        let calculus = &algebra.binary_algebra();
         let value: serde_json::Value = serde_json::from_str(text).map_err(|e| {
             network_error(
                 &format!("line {}, column {}", e.line(), e.column()),
@@ -210,9 +215,10 @@ impl BinaryNetwork {
     /// # Errors
     /// [`QsrError::Network`] naming the constraint by position (`constraints[i]`).
     pub fn from_constraints(
-        calculus: &BinaryCalculus,
+        algebra: &impl AsBinaryAlgebra,
         constraints: &[(String, String, Vec<String>)],
     ) -> crate::Result<Self> {
+        let calculus = &algebra.binary_algebra();
         let parsed = constraints
             .iter()
             .enumerate()
@@ -222,29 +228,38 @@ impl BinaryNetwork {
     }
 
     fn assemble(
-        calculus: &BinaryCalculus,
+        calculus: &BinaryAlgebra,
         parsed: Vec<(String, String, String, Vec<String>)>,
     ) -> crate::Result<Self> {
         let mut names: Vec<String> = Vec::new();
+        let mut index: HashMap<&str, usize> = HashMap::new();
         for (_, a, b, _) in &parsed {
             for p in [a, b] {
-                if !names.contains(p) {
+                if !index.contains_key(p.as_str()) {
+                    index.insert(p, names.len());
                     names.push(p.clone());
                 }
             }
         }
         let mut net = Self::universal(calculus, names)?;
-        for (at, a, b, labels) in parsed {
+        for (at, a, b, labels) in &parsed {
             if a == b {
-                return Err(network_error(&at, format!("`{a}` is related to itself")));
+                return Err(network_error(at, format!("`{a}` is related to itself")));
             }
-            let (i, j) = (net.point(&a).unwrap_or(0), net.point(&b).unwrap_or(0));
+            let (i, j) = (
+                index.get(a.as_str()).copied().unwrap_or(0),
+                index.get(b.as_str()).copied().unwrap_or(0),
+            );
             let mut set = StateSet::empty(calculus.n_states());
-            for l in &labels {
+            for l in labels {
                 let s = calculus.state(l).map_err(|_| {
                     network_error(
-                        &at,
-                        format!("calculus `{}` has no relation `{l}`", calculus.name()),
+                        at,
+                        format!(
+                            "calculus `{}` has no relation `{}`",
+                            calculus.name(),
+                            crate::text_file::shorten(l)
+                        ),
                     )
                 })?;
                 set.insert(s);
@@ -254,10 +269,10 @@ impl BinaryNetwork {
         Ok(net)
     }
 
-    /// The calculus.
+    /// The algebra the network is over.
     #[must_use]
-    pub fn calculus(&self) -> &BinaryCalculus {
-        &self.calculus
+    pub fn algebra(&self) -> &BinaryAlgebra {
+        &self.algebra
     }
 
     /// Point names in index order.
@@ -287,10 +302,24 @@ impl BinaryNetwork {
         &self.sets[self.slot(i, j)]
     }
 
+    /// Words of 64 bits per set.
+    pub(crate) fn words_per_set(&self) -> usize {
+        self.words
+    }
+
+    /// Every set, row by row (`(i · n + j) · words ..`); the diagonal is unused.
+    pub(crate) fn raw_sets(&self) -> &[u64] {
+        &self.sets
+    }
+
+    pub(crate) fn raw_sets_mut(&mut self) -> &mut [u64] {
+        &mut self.sets
+    }
+
     /// The relations possible between `i` and `j`.
     #[must_use]
     pub fn get(&self, i: usize, j: usize) -> StateSet {
-        StateSet::from_words(self.calculus.n_states(), self.words_of(i, j))
+        StateSet::from_words(self.algebra.n_states(), self.words_of(i, j))
     }
 
     /// The labels of `get(i, j)`.
@@ -298,16 +327,34 @@ impl BinaryNetwork {
     pub fn labels_of(&self, i: usize, j: usize) -> Vec<String> {
         self.get(i, j)
             .iter()
-            .map(|s| self.calculus.label(s).to_owned())
+            .map(|s| self.algebra.label(s).to_owned())
             .collect()
     }
 
     fn set_one(&mut self, i: usize, j: usize, set: &StateSet) {
-        let conv = self.converse_of(set.words());
         let slot = self.slot(i, j);
         self.sets[slot].copy_from_slice(set.words());
-        let slot = self.slot(j, i);
-        self.sets[slot].copy_from_slice(&conv);
+        self.update_converse(i, j);
+    }
+
+    /// Rewrites `(j, i)` as the converse of `(i, j)`, in place (networks of 10⁵ constraints
+    /// are read without an allocation per constraint).
+    fn update_converse(&mut self, i: usize, j: usize) {
+        let (from, to) = (self.slot(i, j).start, self.slot(j, i).start);
+        self.sets[to..to + self.words].fill(0);
+        for k in 0..self.words {
+            let mut word = self.sets[from + k];
+            while word != 0 {
+                let r = k * 64 + word.trailing_zeros() as usize;
+                word &= word - 1;
+                for t in self
+                    .algebra
+                    .converse(StateId(u16::try_from(r).unwrap_or(u16::MAX)))
+                {
+                    self.sets[to + t.index() / 64] |= 1 << (t.index() % 64);
+                }
+            }
+        }
     }
 
     /// Replaces the relation of `(i, j)` (and its converse at `(j, i)`).
@@ -322,35 +369,11 @@ impl BinaryNetwork {
         if i == j || i >= self.n_points() || j >= self.n_points() {
             return;
         }
-        let mut words = self.words_of(i, j).to_vec();
-        for (w, s) in words.iter_mut().zip(set.words()) {
+        let slot = self.slot(i, j);
+        for (w, s) in self.sets[slot].iter_mut().zip(set.words()) {
             *w &= s;
         }
-        self.set_one(
-            i,
-            j,
-            &StateSet::from_words(self.calculus.n_states(), &words),
-        );
-    }
-
-    /// The converse of a set of relations, as words.
-    pub(crate) fn converse_of(&self, words: &[u64]) -> Vec<u64> {
-        let conv = self.calculus.converse();
-        let mut out = vec![0u64; self.words];
-        for s in crate::reason::StateSet::from_words(self.calculus.n_states(), words).iter() {
-            for t in conv.get(s) {
-                out[t.index() / 64] |= 1 << (t.index() % 64);
-            }
-        }
-        out
-    }
-
-    pub(crate) fn replace_words(&mut self, i: usize, j: usize, words: &[u64]) {
-        let conv = self.converse_of(words);
-        let slot = self.slot(i, j);
-        self.sets[slot].copy_from_slice(words);
-        let slot = self.slot(j, i);
-        self.sets[slot].copy_from_slice(&conv);
+        self.update_converse(i, j);
     }
 
     /// Whether every pair holds exactly one relation.
@@ -368,7 +391,7 @@ impl BinaryNetwork {
     /// The network in SparQ's text form, listing the pairs `i < j` that are not universal.
     #[must_use]
     pub fn to_sparq(&self) -> String {
-        let n_states = self.calculus.n_states();
+        let n_states = self.algebra.n_states();
         let parts: Vec<String> = self
             .pairs()
             .filter(|&(i, j)| i < j && self.get(i, j).len() < n_states)
@@ -388,7 +411,7 @@ impl BinaryNetwork {
     /// universal.
     #[must_use]
     pub fn constraints_json(&self) -> serde_json::Value {
-        let n_states = self.calculus.n_states();
+        let n_states = self.algebra.n_states();
         serde_json::Value::Array(
             self.pairs()
                 .filter(|&(i, j)| i < j && self.get(i, j).len() < n_states)
@@ -398,149 +421,6 @@ impl BinaryNetwork {
                 .collect(),
         )
     }
-}
-
-/// Why a binary network is inconsistent.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum BinaryContradiction {
-    /// The relation of `(a, b)` was empty as given (e.g. two disjoint sets for one pair).
-    Given {
-        /// First point.
-        a: usize,
-        /// Second point.
-        b: usize,
-    },
-    /// `R(a,b) ∩ R(a,via) ∘ R(via,b)` emptied during closure.
-    Composed {
-        /// First point.
-        a: usize,
-        /// The point in between.
-        via: usize,
-        /// Last point.
-        b: usize,
-    },
-}
-
-/// The outcome of [`close_binary`].
-#[derive(Debug, Clone)]
-pub struct BinaryClosure {
-    /// The closed network (on a contradiction: as it stood when a set emptied).
-    pub network: BinaryNetwork,
-    /// Set when the network is inconsistent.
-    pub contradiction: Option<BinaryContradiction>,
-    /// Sets narrowed.
-    pub revisions: usize,
-}
-
-impl BinaryClosure {
-    /// Whether closure found no contradiction.
-    #[must_use]
-    pub fn is_consistent(&self) -> bool {
-        self.contradiction.is_none()
-    }
-
-    /// The contradiction in words, naming the points.
-    #[must_use]
-    pub fn describe(&self) -> Option<String> {
-        let n = self.network.names();
-        self.contradiction.map(|c| match c {
-            BinaryContradiction::Given { a, b } => format!(
-                "the constraints given for {} and {} leave no relation (disjoint sets?)",
-                n[a], n[b]
-            ),
-            BinaryContradiction::Composed { a, via, b } => format!(
-                "no relation between {} and {} agrees with {}–{} and {}–{}",
-                n[a], n[b], n[a], n[via], n[via], n[b]
-            ),
-        })
-    }
-}
-
-/// Algebraic closure (path consistency): repeat `R(i,k) ← R(i,k) ∩ R(i,j) ∘ R(j,k)` over
-/// every triple until nothing changes. Sound for every calculus whose composition table is
-/// sound — qsr-core's derived binary tables are exact.
-///
-/// # Errors
-/// As [`BinaryCalculus::compose_table`] (a calculus too fine to derive its table).
-pub fn close_binary(network: BinaryNetwork) -> crate::Result<BinaryClosure> {
-    let c = network.calculus.clone();
-    let n_states = c.n_states();
-    let words = network.words;
-    let table = c.compose_table()?;
-    // compose[r][s] as words, and the compositions with a universal side.
-    let mut bits = vec![0u64; n_states * n_states * words];
-    for r in c.states() {
-        for s in c.states() {
-            let at = (r.index() * n_states + s.index()) * words;
-            for t in table.get(r, s) {
-                bits[at + t.index() / 64] |= 1 << (t.index() % 64);
-            }
-        }
-    }
-    let compose = |a: &[u64], b: &[u64]| -> Vec<u64> {
-        let mut out = vec![0u64; words];
-        for r in crate::reason::StateSet::from_words(n_states, a).iter() {
-            for s in crate::reason::StateSet::from_words(n_states, b).iter() {
-                let at = (r.index() * n_states + s.index()) * words;
-                for (o, x) in out.iter_mut().zip(&bits[at..at + words]) {
-                    *o |= x;
-                }
-            }
-        }
-        out
-    };
-    let mut net = network;
-    let n = net.n_points();
-    // A set empty as given is a contradiction even with no third point to compose through.
-    let empty = net
-        .pairs()
-        .find(|&(i, j)| net.words_of(i, j).iter().all(|w| *w == 0));
-    if let Some((a, b)) = empty {
-        return Ok(BinaryClosure {
-            network: net,
-            contradiction: Some(BinaryContradiction::Given { a, b }),
-            revisions: 0,
-        });
-    }
-    let mut queue: std::collections::VecDeque<(usize, usize)> = net.pairs().collect();
-    let mut queued = vec![true; n * n];
-    let mut revisions = 0usize;
-    while let Some((i, j)) = queue.pop_front() {
-        queued[i * n + j] = false;
-        for k in 0..n {
-            if k == i || k == j {
-                continue;
-            }
-            // R(i,k) ∩= R(i,j) ∘ R(j,k)  and  R(k,j) ∩= R(k,i) ∘ R(i,j)
-            for (x, y, via) in [(i, k, j), (k, j, i)] {
-                let composed = compose(net.words_of(x, via), net.words_of(via, y));
-                let old = net.words_of(x, y);
-                let new: Vec<u64> = old.iter().zip(&composed).map(|(a, b)| a & b).collect();
-                if new != old {
-                    revisions += 1;
-                    net.replace_words(x, y, &new);
-                    if new.iter().all(|w| *w == 0) {
-                        return Ok(BinaryClosure {
-                            network: net,
-                            contradiction: Some(BinaryContradiction::Composed { a: x, via, b: y }),
-                            revisions,
-                        });
-                    }
-                    for (p, q) in [(x, y), (y, x)] {
-                        if !queued[p * n + q] {
-                            queued[p * n + q] = true;
-                            queue.push_back((p, q));
-                        }
-                    }
-                }
-            }
-        }
-    }
-    Ok(BinaryClosure {
-        network: net,
-        contradiction: None,
-        revisions,
-    })
 }
 
 /// The relation set of given ids (ids beyond the calculus are ignored).
@@ -555,13 +435,23 @@ impl BinaryNetwork {
     /// # Errors
     /// As [`BinaryNetwork::from_json_str`] and [`BinaryNetwork::from_sparq_str`].
     pub fn parse(
-        calculus: &BinaryCalculus,
+        algebra: &impl AsBinaryAlgebra,
         text: &str,
         format: crate::reason::NetworkFormat,
     ) -> crate::Result<Self> {
         match format {
-            crate::reason::NetworkFormat::Json => Self::from_json_str(calculus, text),
-            crate::reason::NetworkFormat::Sparq => Self::from_sparq_str(calculus, text),
+            crate::reason::NetworkFormat::Json => Self::from_json_str(algebra, text),
+            crate::reason::NetworkFormat::Sparq => Self::from_sparq_str(algebra, text),
+            crate::reason::NetworkFormat::Gqr => {
+                let mut nets = super::csp::from_gqr_csp_str(algebra, text)?;
+                match nets.len() {
+                    1 => Ok(nets.remove(0).network),
+                    k => Err(network_error(
+                        "the file",
+                        format!("{k} networks in one .csp; read them with `from_gqr_csp_str`"),
+                    )),
+                }
+            }
         }
     }
 }

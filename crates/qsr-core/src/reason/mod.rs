@@ -59,3 +59,4 @@ pub use network::{MAX_NETWORK_BYTES, Network};
 pub use network_format::NetworkFormat;
 pub use scenario::{ScenarioOptions, ScenarioOutcome, find_scenario};
 pub use state_set::StateSet;
+pub(crate) use state_set::{fill_universal, iter_bits};

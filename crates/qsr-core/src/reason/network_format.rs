@@ -10,11 +10,14 @@ pub enum NetworkFormat {
     Json,
     /// SparQ's `((A B (r1 r2) C) ...)` ([`Network::to_sparq`]).
     Sparq,
+    /// GQR's `.csp`: `N #comment`, then `i j ( r1 r2 )` lines, then `.` — binary networks
+    /// only ([`crate::binary::from_gqr_csp_str`]).
+    Gqr,
 }
 
 impl NetworkFormat {
     /// The form of `text` by its first character that is not white space: `{` JSON, `(`
-    /// SparQ.
+    /// SparQ, a digit or `#` GQR's `.csp`.
     ///
     /// # Errors
     /// [`QsrError::Network`] for an empty text or another first character, saying which.
@@ -22,9 +25,11 @@ impl NetworkFormat {
         match text.trim_start().chars().next() {
             Some('{') => Ok(Self::Json),
             Some('(') => Ok(Self::Sparq),
+            Some(c) if c.is_ascii_digit() || c == '#' => Ok(Self::Gqr),
             Some(c) => Err(QsrError::Network {
                 at: format!("its first character `{c}`"),
-                reason: "JSON starts with `{`, SparQ with `(`".into(),
+                reason: "JSON starts with `{`, SparQ with `(`, GQR's .csp with its node count"
+                    .into(),
             }),
             None => Err(QsrError::Network {
                 at: "its start".into(),
@@ -43,6 +48,13 @@ impl Network {
         match format {
             NetworkFormat::Json => Self::from_json_str(calculus, text),
             NetworkFormat::Sparq => Self::from_sparq_str(calculus, text),
+            NetworkFormat::Gqr => Err(QsrError::Network {
+                at: "the file".into(),
+                reason: format!(
+                    "GQR's .csp form holds binary networks; `{}` is ternary (use JSON or SparQ)",
+                    calculus.name()
+                ),
+            }),
         }
     }
 }
@@ -61,6 +73,10 @@ mod tests {
         assert_eq!(
             NetworkFormat::detect("((a b (l) c))").unwrap(),
             NetworkFormat::Sparq
+        );
+        assert_eq!(
+            NetworkFormat::detect("9 #N10\n0 1 ( DC )\n.").unwrap(),
+            NetworkFormat::Gqr
         );
         let e = NetworkFormat::detect("a b c").unwrap_err().to_string();
         assert!(e.contains("`a`") && e.contains("SparQ with `(`"), "{e}");
