@@ -280,7 +280,7 @@ fn print_binary(
                 net.to_gqr_csp(format!("{name} {status}").trim_start())
                     .trim_end()
             )?,
-            None => outln!("# {name} {status}")?,
+            None => outln!("# {name} {status}\n.")?,
         },
         NetworkFormat::Json | NetworkFormat::Sparq => {
             let consistent = match status {

@@ -58,7 +58,11 @@ pub fn from_gqr_csp_str(algebra: &impl AsBinaryAlgebra, text: &str) -> Result<Ve
             continue;
         }
         let Some(net) = current.as_mut() else {
-            current = Some(header(&algebra, line, line_no)?);
+            // A `.` with no network open ends nothing (qrm writes `# name status` and `.`
+            // where a search found no network to print).
+            if !line.starts_with('.') {
+                current = Some(header(&algebra, line, line_no)?);
+            }
             continue;
         };
         if line.starts_with('.') {

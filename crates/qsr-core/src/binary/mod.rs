@@ -58,7 +58,7 @@ mod edge_queue;
 mod network;
 mod picture;
 mod relations;
-mod set_ops;
+pub(crate) mod set_ops;
 mod table_files;
 
 pub use algebra::{AsBinaryAlgebra, BinaryAlgebra, MAX_LOADED_RELATIONS};

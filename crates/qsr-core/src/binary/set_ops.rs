@@ -43,6 +43,10 @@ pub(crate) struct SetOps {
     compose: Vec<u64>,
     /// `converse[(k · V + v) · words ..]`.
     converse: Vec<u64>,
+    /// `base[(r · n + s) · words ..]`: `r ∘ s` of two base relations (a small table a
+    /// composition of two single relations reads instead of the block table).
+    base: Vec<u64>,
+    n_states: usize,
     universal: Vec<u64>,
     /// Relations `r` with `r ∘ U = U`.
     left_total: Vec<u64>,
@@ -160,6 +164,8 @@ impl SetOps {
             }
         }
         Self {
+            base,
+            n_states: n,
             words,
             block,
             n_blocks,
@@ -190,6 +196,7 @@ impl SetOps {
         }
         let (compose, _) = self.compose.as_chunks::<W>();
         let (converse, _) = self.converse.as_chunks::<W>();
+        let (base, _) = self.base.as_chunks::<W>();
         let one = |v: &[u64]| -> Option<[u64; W]> { v.try_into().ok() };
         Some(SetView {
             block: self.block,
@@ -202,6 +209,8 @@ impl SetOps {
             },
             compose,
             converse,
+            base,
+            n_states: self.n_states,
             universal: one(&self.universal)?,
             left_total: one(&self.left_total)?,
             right_total: one(&self.right_total)?,
@@ -220,6 +229,8 @@ pub(crate) struct SetView<'a, const W: usize> {
     mask: u64,
     compose: &'a [[u64; W]],
     converse: &'a [[u64; W]],
+    base: &'a [[u64; W]],
+    n_states: usize,
     pub(crate) universal: [u64; W],
     left_total: [u64; W],
     right_total: [u64; W],
@@ -252,6 +263,21 @@ fn for_blocks<const W: usize>(
     true
 }
 
+/// The relation of a set holding exactly one.
+#[inline]
+fn single<const W: usize>(set: &[u64; W]) -> Option<usize> {
+    let mut found = None;
+    for (i, &w) in set.iter().enumerate() {
+        if w != 0 {
+            if found.is_some() || w & (w - 1) != 0 {
+                return None;
+            }
+            found = Some(i * 64 + w.trailing_zeros() as usize);
+        }
+    }
+    found
+}
+
 #[inline]
 fn meets<const W: usize>(a: &[u64; W], b: &[u64; W]) -> bool {
     a.iter().zip(b).any(|(x, y)| x & y != 0)
@@ -272,6 +298,30 @@ impl<const W: usize> SetView<'_, W> {
         right: &[u64; W],
         target: &[u64; W],
     ) -> Option<[u64; W]> {
+        let acc = self.composition_refining(left, right, target)?;
+        let mut out = *target;
+        for (o, a) in out.iter_mut().zip(&acc) {
+            *o &= a;
+        }
+        Some(out)
+    }
+
+    /// `left ∘ right` when it misses part of `target` (so `target` can be refined), else
+    /// `None` — found without finishing the union once it covers `target`. Always inlined:
+    /// it is the body of both closures' innermost loops.
+    #[inline(always)]
+    pub(crate) fn composition_refining(
+        &self,
+        left: &[u64; W],
+        right: &[u64; W],
+        target: &[u64; W],
+    ) -> Option<[u64; W]> {
+        if let (Some(r), Some(s)) = (single(left), single(right)) {
+            // Two single relations (a scenario's sets, a map's most likely states): the base
+            // table, a few KiB that stay in cache.
+            let acc = self.base[r * self.n_states + s];
+            return (!covers(&acc, target)).then_some(acc);
+        }
         if (*right == self.universal && meets(left, &self.left_total))
             || (*left == self.universal && meets(right, &self.right_total))
         {
@@ -296,14 +346,7 @@ impl<const W: usize> SetView<'_, W> {
                     }
                 }
             }
-            if covers(&acc, target) {
-                return None;
-            }
-            let mut out = *target;
-            for (o, a) in out.iter_mut().zip(&acc) {
-                *o &= a;
-            }
-            return Some(out);
+            return (!covers(&acc, target)).then_some(acc);
         }
         let covered = !for_blocks(left, self.block, self.mask, |kl, vl| {
             let base = (kl * vc + vl) * nb;
@@ -317,14 +360,7 @@ impl<const W: usize> SetView<'_, W> {
             // Stop once the union covers the target: nothing can be removed.
             !covers(&acc, target)
         });
-        if covered {
-            return None;
-        }
-        let mut out = *target;
-        for (o, a) in out.iter_mut().zip(&acc) {
-            *o &= a;
-        }
-        (out != *target).then_some(out)
+        (!covered && !covers(&acc, target)).then_some(acc)
     }
 
     /// The weight of a set: the sum of its relations' weights (GQR's queue key).

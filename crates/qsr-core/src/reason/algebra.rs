@@ -1,6 +1,7 @@
 //! [`Algebra`]: a ternary calculus's composition and permutation tables as bitsets — what
 //! algebraic closure needs of a calculus, and nothing else.
 
+use crate::binary::set_ops::{SetOps, SetView};
 use crate::calculus::{Calculus, StateId};
 use crate::compose::{ComposeOptions, ComposeTable};
 use crate::error::QsrError;
@@ -41,6 +42,9 @@ pub struct Algebra {
     /// `permute[op][r * words ..][..words]`.
     permute: [Vec<u64>; 5],
     universal: Vec<u64>,
+    /// Set composition by block tables, for calculi of at most 64 states (one word per set):
+    /// closure's hot loop (see [`crate::binary::set_ops`]).
+    ops: Option<std::sync::Arc<SetOps>>,
 }
 
 impl Algebra {
@@ -136,6 +140,11 @@ impl Algebra {
         }
         let mut universal = vec![0u64; words];
         fill_universal(&mut universal, n);
+        // Composition is all closure needs of the block tables; converse is not used.
+        let ops = (words == 1).then(|| {
+            let identity: Vec<Vec<StateId>> = calculus.states().map(|s| vec![s]).collect();
+            std::sync::Arc::new(SetOps::new(compose, &identity, &vec![1; n]))
+        });
         Ok(Self {
             calculus: calculus.clone(),
             words,
@@ -145,7 +154,13 @@ impl Algebra {
             compose_any_any: any_any,
             permute,
             universal,
+            ops,
         })
+    }
+
+    /// The one-word block kernel, for calculi of at most 64 states.
+    pub(crate) fn one_word(&self) -> Option<SetView<'_, 1>> {
+        self.ops.as_ref().and_then(|o| o.view::<1>())
     }
 
     /// The calculus.

@@ -382,6 +382,12 @@ impl Propagation {
             }
         }
         let mut queued = vec![false; n * n * n];
+        // Every composition rule instance `{a,b:d} ⊆ {a,b:c} ∘ {b,c:d}` has a left input, so
+        // a first round over every triplet evaluates each instance once from its left input
+        // (rule 1 below) and skips the right-input copies (rule 2), which read the network a
+        // column at a time. A triplet whose sets change after an instance read them is queued,
+        // and later rounds run both rules, as does a triplet its own permutations refined.
+        let mut left_only = frontier.len() == n * n.saturating_sub(1) * n.saturating_sub(2) / 6;
         while !frontier.is_empty() {
             frontier.sort_unstable();
             frontier.dedup();
@@ -396,13 +402,15 @@ impl Propagation {
             // applied in order. Bounded memory (a round over all triplets of 200 points would
             // otherwise hold ~10^9 proposals), and later chunks see earlier refinements.
             for chunk in frontier.chunks(CHUNK) {
+                let mut both = Vec::with_capacity(chunk.len());
                 for &t in chunk {
-                    self.sync_permutations(net, alg, t)?;
+                    both.push(self.sync_permutations(net, alg, t)? || !left_only);
                 }
                 let snapshot: &Network = net;
                 let proposals: Vec<Vec<Proposal>> = chunk
                     .par_iter()
-                    .map(|&t| compositions(snapshot, alg, t))
+                    .zip(&both)
+                    .map(|(&t, &both)| compositions(snapshot, alg, t, both))
                     .collect();
                 for p in proposals.into_iter().flatten() {
                     let target = p.target as usize;
@@ -421,6 +429,7 @@ impl Propagation {
                 }
             }
             frontier = next;
+            left_only = false;
         }
         Ok(())
     }
@@ -458,14 +467,16 @@ impl Propagation {
         Ok(true)
     }
 
-    /// Makes the six orderings of one unordered triplet agree through the permutation tables.
+    /// Makes the six orderings of one unordered triplet agree through the permutation tables;
+    /// whether that changed any.
     fn sync_permutations(
         &mut self,
         net: &mut Network,
         alg: &Algebra,
         canon: usize,
-    ) -> Result<(), Emptied> {
+    ) -> Result<bool, Emptied> {
         let [a, b, c] = net.triplet(canon);
+        let mut any = false;
         let mut permuted = vec![0u64; alg.words()];
         loop {
             let mut changed = false;
@@ -487,14 +498,19 @@ impl Propagation {
                 }
             }
             if !changed {
-                return Ok(());
+                return Ok(any);
             }
+            any = true;
         }
     }
 }
 
-/// The compositions in which one ordering of the triplet is an input.
-fn compositions(net: &Network, alg: &Algebra, canon: usize) -> Vec<Proposal> {
+/// The compositions in which one ordering of the triplet is an input: as the left input
+/// (rule 1), and as the right one (rule 2) when `both`.
+fn compositions(net: &Network, alg: &Algebra, canon: usize, both: bool) -> Vec<Proposal> {
+    if let Some(view) = alg.one_word() {
+        return compositions_one_word(net, &view, canon, both);
+    }
     let n = net.n_points();
     let [a, b, c] = net.triplet(canon);
     let mut out = vec![0u64; alg.words()];
@@ -520,6 +536,9 @@ fn compositions(net: &Network, alg: &Algebra, canon: usize) -> Vec<Proposal> {
                     allowed: out.clone(),
                 });
             }
+            if !both {
+                continue;
+            }
             // {w,p:r} ⊆ {w,p:q} ∘ {p,q:r}
             let (target, left) = (net.index(w, p, r), net.index(w, p, q));
             if alg.compose_refines(net.words_at(left), given, net.words_at(target), &mut out) {
@@ -528,6 +547,62 @@ fn compositions(net: &Network, alg: &Algebra, canon: usize) -> Vec<Proposal> {
                     left: left as u32,
                     right: pqr as u32,
                     allowed: out.clone(),
+                });
+            }
+        }
+    }
+    proposals
+}
+
+/// [`compositions`] for sets of one word, composed by the block tables (EDC and every
+/// built-in calculus): the same rules in the same order, so the same proposals.
+fn compositions_one_word(
+    net: &Network,
+    view: &crate::binary::set_ops::SetView<'_, 1>,
+    canon: usize,
+    both: bool,
+) -> Vec<Proposal> {
+    let n = net.n_points();
+    let [a, b, c] = net.triplet(canon);
+    let sets = net.one_word_sets();
+    let mut proposals = Vec::new();
+    for (p, q, r) in [
+        (a, b, c),
+        (b, a, c),
+        (a, c, b),
+        (c, a, b),
+        (b, c, a),
+        (c, b, a),
+    ] {
+        let pqr = net.index(p, q, r);
+        let given = [sets[pqr]];
+        // Index strides: {p,q:w} = pq + w, {q,r:w} = qr + w, {w,p:r} = w·n² + pr,
+        // {w,p:q} = w·n² + pq'.
+        let (pq, qr) = (net.index(p, q, 0), net.index(q, r, 0));
+        let (wpr, wpq) = (net.index(0, p, r), net.index(0, p, q));
+        let nn = n * n;
+        for w in (0..n).filter(|&w| w != a && w != b && w != c) {
+            // {p,q:w} ⊆ {p,q:r} ∘ {q,r:w}
+            let (target, right) = (pq + w, qr + w);
+            if let Some(out) = view.composition_refining(&given, &[sets[right]], &[sets[target]]) {
+                proposals.push(Proposal {
+                    target: target as u32,
+                    left: pqr as u32,
+                    right: right as u32,
+                    allowed: out.to_vec(),
+                });
+            }
+            if !both {
+                continue;
+            }
+            // {w,p:r} ⊆ {w,p:q} ∘ {p,q:r}
+            let (target, left) = (w * nn + wpr, w * nn + wpq);
+            if let Some(out) = view.composition_refining(&[sets[left]], &given, &[sets[target]]) {
+                proposals.push(Proposal {
+                    target: target as u32,
+                    left: left as u32,
+                    right: pqr as u32,
+                    allowed: out.to_vec(),
                 });
             }
         }

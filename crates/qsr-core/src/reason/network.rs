@@ -186,6 +186,12 @@ impl Network {
         n * n.saturating_sub(1) * n.saturating_sub(2)
     }
 
+    /// Every set by flat index (one word each for a calculus of at most 64 states, the only
+    /// caller: closure's one-word kernel).
+    pub(crate) fn one_word_sets(&self) -> &[u64] {
+        &self.sets
+    }
+
     /// The flat index of an ordered triplet.
     pub(crate) fn index(&self, a: usize, b: usize, c: usize) -> usize {
         let n = self.n_points();
