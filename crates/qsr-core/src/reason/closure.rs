@@ -254,6 +254,7 @@ pub(crate) fn close_from(
             .explain
             .then(|| vec![Reason::Given; network.n_points().pow(3)]),
         stats: ClosureStats::default(),
+        transposed: None,
     };
     let outcome = state.run(&mut network, algebra, frontier);
     let contradiction = outcome.err().map(|empty| {
@@ -358,7 +359,15 @@ struct Proposal {
 struct Propagation {
     reasons: Option<Vec<Reason>>,
     stats: ClosureStats,
+    /// For one-word sets in a full closure: every set again, at `(x·n + y)·n + w` for
+    /// `{w,x:y}`, so the right-input rule reads `{w,p:q}` and `{w,p:r}` over all `w` in order
+    /// instead of a column of the n³ array. Kept equal to the network by [`Self::refine`].
+    transposed: Option<Vec<u64>>,
 }
+
+/// The most points for which a full closure keeps [`Propagation::transposed`] (its n³ words
+/// double the network's memory).
+const MAX_TRANSPOSED_POINTS: usize = 400;
 
 impl Propagation {
     fn run(
@@ -388,6 +397,14 @@ impl Propagation {
         // column at a time. A triplet whose sets change after an instance read them is queued,
         // and later rounds run both rules, as does a triplet its own permutations refined.
         let mut left_only = frontier.len() == n * n.saturating_sub(1) * n.saturating_sub(2) / 6;
+        if left_only && alg.one_word().is_some() && n <= MAX_TRANSPOSED_POINTS {
+            let sets = net.one_word_sets();
+            let mut t = vec![0u64; n * n * n];
+            for (i, &set) in sets.iter().enumerate().take(n * n * n) {
+                t[(i % (n * n)) * n + i / (n * n)] = set;
+            }
+            self.transposed = Some(t);
+        }
         while !frontier.is_empty() {
             frontier.sort_unstable();
             frontier.dedup();
@@ -407,10 +424,11 @@ impl Propagation {
                     both.push(self.sync_permutations(net, alg, t)? || !left_only);
                 }
                 let snapshot: &Network = net;
+                let transposed = self.transposed.as_deref();
                 let proposals: Vec<Vec<Proposal>> = chunk
                     .par_iter()
                     .zip(&both)
-                    .map(|(&t, &both)| compositions(snapshot, alg, t, both))
+                    .map(|(&t, &both)| compositions(snapshot, transposed, alg, t, both))
                     .collect();
                 for p in proposals.into_iter().flatten() {
                     let target = p.target as usize;
@@ -453,6 +471,10 @@ impl Propagation {
             empty &= *c == 0;
         }
         self.stats.refinements += 1;
+        if let Some(t) = &mut self.transposed {
+            let n = net.n_points();
+            t[(target % (n * n)) * n + target / (n * n)] = net.words_at(target)[0];
+        }
         if let Some(r) = &mut self.reasons {
             r[target] = reason;
         }
@@ -507,9 +529,15 @@ impl Propagation {
 
 /// The compositions in which one ordering of the triplet is an input: as the left input
 /// (rule 1), and as the right one (rule 2) when `both`.
-fn compositions(net: &Network, alg: &Algebra, canon: usize, both: bool) -> Vec<Proposal> {
+fn compositions(
+    net: &Network,
+    transposed: Option<&[u64]>,
+    alg: &Algebra,
+    canon: usize,
+    both: bool,
+) -> Vec<Proposal> {
     if let Some(view) = alg.one_word() {
-        return compositions_one_word(net, &view, canon, both);
+        return compositions_one_word(net, transposed, &view, canon, both);
     }
     let n = net.n_points();
     let [a, b, c] = net.triplet(canon);
@@ -558,6 +586,7 @@ fn compositions(net: &Network, alg: &Algebra, canon: usize, both: bool) -> Vec<P
 /// built-in calculus): the same rules in the same order, so the same proposals.
 fn compositions_one_word(
     net: &Network,
+    transposed: Option<&[u64]>,
     view: &crate::binary::set_ops::SetView<'_, 1>,
     canon: usize,
     both: bool,
@@ -597,7 +626,11 @@ fn compositions_one_word(
             }
             // {w,p:r} ⊆ {w,p:q} ∘ {p,q:r}
             let (target, left) = (w * nn + wpr, w * nn + wpq);
-            if let Some(out) = view.composition_refining(&[sets[left]], &given, &[sets[target]]) {
+            let (left_set, target_set) = match transposed {
+                Some(t) => (t[wpq * n + w], t[wpr * n + w]),
+                None => (sets[left], sets[target]),
+            };
+            if let Some(out) = view.composition_refining(&[left_set], &given, &[target_set]) {
                 proposals.push(Proposal {
                     target: target as u32,
                     left: left as u32,
