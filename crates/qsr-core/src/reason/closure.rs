@@ -502,14 +502,7 @@ impl Propagation {
         let mut permuted = vec![0u64; alg.words()];
         loop {
             let mut changed = false;
-            for (x, y, z) in [
-                (a, b, c),
-                (b, a, c),
-                (a, c, b),
-                (c, a, b),
-                (b, c, a),
-                (c, b, a),
-            ] {
+            for (x, y, z) in processing_order(a, b, c) {
                 let from = net.index(x, y, z);
                 for op in Permutation::ALL {
                     let (p, q, r) = op.apply(x, y, z);
@@ -525,6 +518,19 @@ impl Propagation {
             any = true;
         }
     }
+}
+
+/// The six orderings of a triplet in the order closure processes them (fixed: the order of
+/// refinements, and so the contradiction reported, depends on it).
+fn processing_order(a: usize, b: usize, c: usize) -> [(usize, usize, usize); 6] {
+    [
+        (a, b, c),
+        (b, a, c),
+        (a, c, b),
+        (c, a, b),
+        (b, c, a),
+        (c, b, a),
+    ]
 }
 
 /// The compositions in which one ordering of the triplet is an input: as the left input
@@ -543,14 +549,7 @@ fn compositions(
     let [a, b, c] = net.triplet(canon);
     let mut out = vec![0u64; alg.words()];
     let mut proposals = Vec::new();
-    for (p, q, r) in [
-        (a, b, c),
-        (b, a, c),
-        (a, c, b),
-        (c, a, b),
-        (b, c, a),
-        (c, b, a),
-    ] {
+    for (p, q, r) in processing_order(a, b, c) {
         let pqr = net.index(p, q, r);
         let given = net.words_at(pqr);
         for w in (0..n).filter(|&w| w != a && w != b && w != c) {
@@ -595,14 +594,7 @@ fn compositions_one_word(
     let [a, b, c] = net.triplet(canon);
     let sets = net.one_word_sets();
     let mut proposals = Vec::new();
-    for (p, q, r) in [
-        (a, b, c),
-        (b, a, c),
-        (a, c, b),
-        (c, a, b),
-        (b, c, a),
-        (c, b, a),
-    ] {
+    for (p, q, r) in processing_order(a, b, c) {
         let pqr = net.index(p, q, r);
         let given = [sets[pqr]];
         // Index strides: {p,q:w} = pq + w, {q,r:w} = qr + w, {w,p:r} = w·n² + pr,
