@@ -565,3 +565,20 @@ proptest! {
         }
     }
 }
+
+#[test]
+fn regression_a_gqr_spec_with_a_latin1_comment_loads() {
+    // GQR's data/occ.spec carries an ISO-8859-1 comment; it was refused as "not valid UTF-8".
+    let dir = std::env::temp_dir().join(format!("qrm-gqr-latin1-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::write(dir.join("p.conv"), POINT_CONV).unwrap();
+    std::fs::write(dir.join("p.comp"), POINT_COMP).unwrap();
+    let mut spec = b"# Punktalgebra (W\xf6lfl)\n".to_vec();
+    spec.extend_from_slice(
+        b"comp_table_file p.comp\nconverse_file p.conv\nidentity =\ncalculus_size 3\n",
+    );
+    std::fs::write(dir.join("p.spec"), spec).unwrap();
+    let alg = BinaryAlgebra::from_gqr_spec(&dir.join("p.spec")).unwrap();
+    assert_eq!(alg.labels(), ["<", "=", ">"]);
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -12,7 +12,20 @@ use crate::calculus::StateId;
 use crate::compose::ComposeTable;
 use crate::error::{QsrError, Result};
 use crate::reason::network::sexpr;
-use crate::text_file::{MAX_INPUT_BYTES, read_text, shorten};
+use crate::text_file::{MAX_INPUT_BYTES, read_bytes, shorten};
+
+/// A calculus file's text. GQR's own files are older than UTF-8 (its `occ.spec` has an
+/// ISO-8859-1 comment), so bytes that are not UTF-8 become U+FFFD rather than an error:
+/// relation names are ASCII in every published table, and one that is not still fails to
+/// match, naming its line.
+fn read_calculus_file(path: &Path) -> Result<String> {
+    read_bytes(path, MAX_INPUT_BYTES)
+        .map(|bytes| String::from_utf8_lossy(&bytes).into_owned())
+        .map_err(|source| QsrError::Io {
+            path: path.to_owned(),
+            source,
+        })
+}
 
 fn spec_error(file: &str, reason: impl Into<String>) -> QsrError {
     QsrError::Spec {
@@ -66,12 +79,7 @@ impl BinaryAlgebra {
     /// [`QsrError::Io`] for a file that cannot be read; [`QsrError::Spec`] naming the file and
     /// line for a malformed one, a size that disagrees with the tables, a missing entry.
     pub fn from_gqr_spec(path: &Path) -> Result<Self> {
-        let read = |p: &Path| {
-            read_text(p, MAX_INPUT_BYTES).map_err(|source| QsrError::Io {
-                path: p.to_owned(),
-                source,
-            })
-        };
+        let read = read_calculus_file;
         let text = read(path)?;
         let shown = path.display().to_string();
         let mut keys: HashMap<&str, (usize, &str)> = HashMap::new();
@@ -165,10 +173,7 @@ impl BinaryAlgebra {
     /// [`QsrError::Io`], and [`QsrError::Spec`] naming the file for a form that is missing,
     /// not binary, or whose tables name relations it does not have.
     pub fn from_sparq_file(path: &Path) -> Result<Self> {
-        let text = read_text(path, MAX_INPUT_BYTES).map_err(|source| QsrError::Io {
-            path: path.to_owned(),
-            source,
-        })?;
+        let text = read_calculus_file(path)?;
         Self::from_sparq_str(&text).map_err(|e| match e {
             QsrError::Spec { reason, .. } => spec_error(&path.display().to_string(), reason),
             other => other,
