@@ -38,8 +38,24 @@ impl TableFormat {
     }
 }
 
+/// Says on stderr, before a derivation of more than a few seconds starts, how long it is
+/// expected to take (issue 39: `calculus compose opra-8` ran for 40 s without a word).
+pub fn announce_derivation(c: &BinaryCalculus) {
+    let cached = qsr_core::binary::default_cache_dir()
+        .is_some_and(|d| qsr_core::binary::cache_path(c, &d).exists());
+    let seconds = c.compose_cost().seconds();
+    if !cached && seconds >= 5.0 {
+        eprintln!(
+            "{}: deriving its composition table, about {seconds:.0} s of CPU (estimated; \
+             cached afterwards)",
+            c.name()
+        );
+    }
+}
+
 /// Loads or derives the tables, saying on stderr where they came from and how long it took.
 fn tables(c: &BinaryCalculus) -> Result<()> {
+    announce_derivation(c);
     let start = Instant::now();
     let outcome = c.load_or_derive_cached()?;
     let secs = start.elapsed().as_secs_f64();

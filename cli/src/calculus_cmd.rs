@@ -62,6 +62,19 @@ fn load_binary(name: &str) -> Result<BinaryCalculus> {
 /// Binary calculi: everything of `opra-M`; composition, converse and neighbours of `star-m`
 /// (its classification, spec and picture are those of the oriented spec calculus).
 fn validate_binary(cmd: &CalculusCmd) -> Result<Option<Job>> {
+    let name = match cmd {
+        CalculusCmd::List => None,
+        CalculusCmd::Show { name, .. }
+        | CalculusCmd::Spec { name, .. }
+        | CalculusCmd::Classify { name }
+        | CalculusCmd::Neighbours { name, .. }
+        | CalculusCmd::Compose { name, .. }
+        | CalculusCmd::Permute { name, .. }
+        | CalculusCmd::Render { name, .. } => Some(name),
+    };
+    if let Some(e) = name.and_then(|n| qsr_core::binary::name_out_of_range(n)) {
+        return Err(e).context("loading the calculus");
+    }
     let opra = |n: &str| n.starts_with("opra-");
     let job = match cmd {
         CalculusCmd::Show { name, json } if opra(name) => (name, BinaryJob::Show { json: *json }),

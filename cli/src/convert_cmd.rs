@@ -42,7 +42,7 @@ pub fn run(a: ConvertArgs) -> Result<()> {
     }
     // Written beside the target and renamed when finished: a failure or Ctrl-C never leaves a
     // half-written file under the final name.
-    let file = qrm_files::StagedFile::new(&a.out)?;
+    let file = crate::output::stage_file(&a.out)?;
     qrm_log::write_dataset(file.path(), &data, &a.input.display().to_string())?;
     file.commit()?;
     let robots: std::collections::BTreeSet<u32> = data.scans.iter().map(|s| s.robot).collect();

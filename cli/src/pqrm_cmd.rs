@@ -18,7 +18,7 @@ use studies::pqrm::real_data::{RealData, RealDataConfig};
 use crate::args::{
     CalibrateArgs, MapArgs, MergeArgs, OrderingsArg, PqrmCmd, RealArgs, StudyArgs, TruthDataset,
 };
-use crate::output::{Staging, write_atomic};
+use crate::output::write_atomic;
 
 /// Runs one `pqrm` subcommand.
 pub fn run(cmd: PqrmCmd) -> Result<()> {
@@ -82,7 +82,7 @@ pub fn map(a: MapArgs) -> Result<()> {
     }
     // Written into a staging directory, moved into place only when all is done: a
     // failure or Ctrl-C leaves nothing a user could take for a result.
-    let stage = Staging::new(&a.out)?;
+    let stage = crate::output::stage(&a.out)?;
     let summary = if a.per_robot {
         let mut all = serde_json::Map::new();
         for r in input.robots() {
@@ -171,7 +171,7 @@ fn map_into(
 /// `qrm pqrm calibrate`.
 fn calibrate(a: CalibrateArgs) -> Result<()> {
     let calibration = Calibration::of_recording(a.format.into(), &a.input)?;
-    let stage = Staging::new(&a.out)?;
+    let stage = crate::output::stage(&a.out)?;
     qrm_files::write_products(stage.path(), &calibration.products())?;
     // Committed before printing: a closed pipe must not lose the result.
     stage.commit()?;

@@ -1,5 +1,6 @@
 //! `qrm reason ...`: thin front end over `qsr_core::reason` (closure, scenarios).
 
+use std::io::Write as _;
 use std::path::PathBuf;
 
 use anyhow::{Context, Result, bail};
@@ -237,6 +238,11 @@ fn read_network(args: &NetworkArgs) -> Result<(String, String, qsr_core::reason:
 
 /// The binary calculus `--calculus` names, if it names one (a ternary built-in wins).
 fn binary_algebra(name: &str) -> Result<Option<BinaryAlgebra>> {
+    if qsr_core::binary::is_binary_name(name)
+        && let Ok(c) = qsr_core::binary::BinaryCalculus::builtin(name)
+    {
+        crate::binary_cmd::announce_derivation(&c);
+    }
     BinaryAlgebra::resolve(name).with_context(|| format!("loading calculus `{name}`"))
 }
 
@@ -354,13 +360,23 @@ fn solve_binary_networks(args: &ScenarioArgs, algebra: &BinaryAlgebra) -> Result
     Ok(())
 }
 
-/// `{"consistent": bool, "constraints": [...]}` on stdout.
-fn print_constraints(consistent: bool, constraints: serde_json::Value) -> Result<()> {
-    outln!(
-        "{}",
-        json!({"consistent": consistent, "constraints": constraints})
-    )?;
-    Ok(())
+/// `{"consistent": bool, "constraints": [...]}` on stdout (`null` without a network), written
+/// one triplet at a time: the whole value of a 100-point network took 1.3 GB (issue 39).
+fn print_network(consistent: bool, network: Option<&Network>) -> Result<()> {
+    let mut out = std::io::BufWriter::new(std::io::stdout().lock());
+    let written = (|| -> std::io::Result<()> {
+        write!(out, "{{\"consistent\":{consistent},\"constraints\":")?;
+        match network {
+            Some(n) => n.write_constraints_json(&mut out)?,
+            None => out.write_all(b"null")?,
+        }
+        out.write_all(b"}\n")?;
+        out.flush()
+    })();
+    match written {
+        Err(e) if e.kind() == std::io::ErrorKind::BrokenPipe => Ok(()),
+        other => Ok(other?),
+    }
 }
 
 /// A ternary network and the algebra it is reasoned with (stage two of argument parsing).
@@ -412,7 +428,7 @@ pub fn run(cmd: ReasonCmd) -> Result<()> {
             if let Some(c) = &closed.contradiction {
                 eprintln!("inconsistent: {}", c.describe(&closed.network));
             }
-            print_constraints(closed.is_consistent(), closed.network.constraints_json())
+            print_network(closed.is_consistent(), Some(&closed.network))
         }
         ReasonCmd::Scenario(args) => {
             let (network, algebra) = load(&args.network)?;
@@ -420,8 +436,8 @@ pub fn run(cmd: ReasonCmd) -> Result<()> {
                 max_nodes: args.max_nodes,
             };
             match find_scenario(network, &algebra, &options)? {
-                ScenarioOutcome::Found(s) => print_constraints(true, s.constraints_json()),
-                ScenarioOutcome::None => print_constraints(false, serde_json::Value::Null),
+                ScenarioOutcome::Found(s) => print_network(true, Some(&s)),
+                ScenarioOutcome::None => print_network(false, None),
                 ScenarioOutcome::GaveUp { nodes } => bail!(
                     "no answer within {nodes} search nodes (raise --max-nodes to search longer)"
                 ),
@@ -448,7 +464,17 @@ fn export(args: &ExportArgs) -> Result<()> {
     };
     let net = pqrm::reason::to_network(&map, selection)?;
     match args.format {
-        NetworkFormat::Json => outln!("{}", net.to_json())?,
+        NetworkFormat::Json => {
+            let mut out = std::io::BufWriter::new(std::io::stdout().lock());
+            let written = net
+                .write_json(&mut out)
+                .and_then(|()| out.write_all(b"\n"))
+                .and_then(|()| out.flush());
+            match written {
+                Err(e) if e.kind() == std::io::ErrorKind::BrokenPipe => {}
+                other => other?,
+            }
+        }
         NetworkFormat::Sparq => outln!("{}", net.to_sparq())?,
         NetworkFormat::Gqr => bail!("a map's network is ternary: GQR's .csp holds binary ones"),
     }

@@ -12,7 +12,6 @@ use studies::serge::datasets::{DATASETS, DatasetName};
 use studies::serge::region_map::RegionMapJob;
 
 use crate::flags::StudyFlags;
-use crate::output::Staging;
 
 /// `qrm serge ...`.
 #[derive(Debug, clap::Subcommand)]
@@ -149,7 +148,7 @@ fn run_map(a: RunArgs) -> Result<()> {
     let run = job.run()?;
     // Written into a staging directory, moved into place only when all is done: a
     // failure or Ctrl-C leaves nothing a user could take for a result.
-    let stage = Staging::new(&a.out)?;
+    let stage = crate::output::stage(&a.out)?;
     qrm_files::write_products(stage.path(), &run.products())?;
     outln!("{}; wrote {}", run.describe(), a.out.display())?;
     stage.commit()?;
@@ -187,7 +186,7 @@ fn learn(a: LearnArgs) -> Result<()> {
     let learned = LearnedFromRecording::learn(&learner, &a.input, &a.name)?;
     // Written into a staging directory, moved into place only when all is done: a
     // failure or Ctrl-C leaves nothing a user could take for a result.
-    let stage = Staging::new(&a.out)?;
+    let stage = crate::output::stage(&a.out)?;
     qrm_files::write_products(stage.path(), &learned.products()?)?;
     outln!("{}; wrote {}", learned.describe(), a.out.display())?;
     stage.commit()?;

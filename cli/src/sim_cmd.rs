@@ -6,8 +6,6 @@ use std::path::PathBuf;
 use anyhow::Result;
 use studies::simulation::{Detector, Simulation, read_world};
 
-use crate::output::Staging;
-
 /// Raw flags of `qrm sim`.
 #[derive(Debug, clap::Args)]
 pub struct SimArgs {
@@ -63,7 +61,7 @@ pub fn run(a: SimArgs) -> Result<()> {
     pb.finish_and_clear();
     // Written into a staging directory, moved into place only when all is done: a
     // failure or Ctrl-C leaves nothing a user could take for a result.
-    let stage = Staging::new(&a.out)?;
+    let stage = crate::output::stage(&a.out)?;
     qrm_files::write_products(stage.path(), &run.products()?)?;
     outln!("{}; wrote {}", run.describe(), a.out.display())?;
     stage.commit()?;

@@ -11,7 +11,7 @@ use studies::{AnyStudy, Report};
 use studies::config::{from_toml, overlay, set_field, to_toml};
 use studies::shard::ShardFile;
 
-use crate::output::{Staging, write_atomic};
+use crate::output::write_atomic;
 
 /// `qrm study ...`.
 #[derive(Debug, clap::Subcommand)]
@@ -169,7 +169,7 @@ fn aggregate(a: &AggregateArgs) -> Result<()> {
         let file = ShardFile::read(&text, &path.display().to_string(), study.name(), &config)?;
         shards.push((file.index, file.shard));
     }
-    let stage = Staging::new(&a.out)?;
+    let stage = crate::output::stage(&a.out)?;
     let ran = study.aggregate(&config, shards)?;
     qrm_files::write_run(stage.path(), &ran, None)?;
     print_report(&ran.report)?;
@@ -234,7 +234,7 @@ pub fn run_and_write(
     out: &Path,
     shown: Shown,
 ) -> Result<()> {
-    let stage = Staging::new(out)?;
+    let stage = crate::output::stage(out)?;
     let pb = crate::progress::Bar::new(0, study.name());
     let t0 = std::time::Instant::now();
     let ran = study.run(config, &pb)?;

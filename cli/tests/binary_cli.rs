@@ -59,10 +59,31 @@ fn compose_gqr_output_is_gqrs_table_and_the_cache_is_used() {
         .unwrap()
         .unwrap()
         .path();
+    let intact = std::fs::read_to_string(&file).unwrap();
     std::fs::write(&file, "{ truncated").unwrap();
     let third = qrm_cached(&["calculus", "compose", "opra-1", "--gqr"], &cache);
     assert!(String::from_utf8_lossy(&third.stderr).contains("unusable"));
     assert_eq!(first.stdout, third.stdout);
+    // Issue 39: one changed digit still parses as JSON and gave wrong tables with exit 0; the
+    // checksum refuses it.
+    let at = intact.find("\"compose\":[[[").unwrap() + "\"compose\":[[[".len();
+    let flipped = if intact[at..].starts_with('1') {
+        '2'
+    } else {
+        '1'
+    };
+    std::fs::write(
+        &file,
+        format!("{}{flipped}{}", &intact[..at], &intact[at + 1..]),
+    )
+    .unwrap();
+    let fourth = qrm_cached(&["calculus", "compose", "opra-1", "--gqr"], &cache);
+    let err = String::from_utf8_lossy(&fourth.stderr);
+    assert!(
+        err.contains("unusable") && err.contains("checksum"),
+        "{err}"
+    );
+    assert_eq!(first.stdout, fourth.stdout);
     let _ = std::fs::remove_dir_all(&cache);
 
     let ours = gqr_sets(&String::from_utf8(first.stdout).unwrap());

@@ -1,5 +1,6 @@
 //! Outputs are whole or absent (issue 17): a failing command leaves no output directory, and
-//! Ctrl-C stops a long one within a second, says so, and removes what it had started.
+//! Ctrl-C (SIGTERM, SIGHUP) stops a long one within a second, says so, and removes what it had
+//! started; what SIGKILL leaves, the next run beside it removes (issue 39).
 #![allow(clippy::unwrap_used)] // tests: a panic is the failure report
 
 mod common;
@@ -61,9 +62,8 @@ fn map_failing_at_scoring_leaves_no_output() {
     let _ = std::fs::remove_dir_all(&d);
 }
 
-#[test]
-fn ctrl_c_stops_a_long_run_within_a_second_and_removes_its_output() {
-    let d = scratch("interrupt");
+/// Starts a long study writing to `d/study`; returns it once its staging directory exists.
+fn start_long_study(d: &std::path::Path) -> (std::process::Child, std::path::PathBuf) {
     let out = d.join("study");
     let child = Command::new(env!("CARGO_BIN_EXE_qrm"))
         .args([
@@ -88,20 +88,76 @@ fn ctrl_c_stops_a_long_run_within_a_second_and_removes_its_output() {
         std::thread::sleep(Duration::from_millis(50));
     }
     std::thread::sleep(Duration::from_millis(300));
-    let sent = Instant::now();
+    (child, staging)
+}
+
+fn send(signal: &str, pid: u32) {
     let kill = Command::new("kill")
-        .args(["-INT", &child.id().to_string()])
+        .args([signal, &pid.to_string()])
         .status()
         .unwrap();
     assert!(kill.success());
-    let o = child.wait_with_output().unwrap();
-    let took = sent.elapsed();
-    assert!(took < Duration::from_secs(1), "took {took:?} to stop");
-    assert_eq!(o.status.code(), Some(130));
-    assert!(String::from_utf8_lossy(&o.stderr).contains("interrupted"));
+}
+
+/// Ctrl-C, and (issue 39) SIGTERM and SIGHUP — what `timeout`, `kill`, systemd and job
+/// schedulers send — which left the hidden staging directory beside `--out`.
+#[test]
+fn ctrl_c_sigterm_and_sighup_stop_a_long_run_within_a_second_and_remove_its_output() {
+    for signal in ["-INT", "-TERM", "-HUP"] {
+        let d = scratch(&format!("interrupt{signal}"));
+        let (child, staging) = start_long_study(&d);
+        let sent = Instant::now();
+        send(signal, child.id());
+        let o = child.wait_with_output().unwrap();
+        let took = sent.elapsed();
+        assert!(
+            took < Duration::from_secs(1),
+            "{signal}: took {took:?} to stop"
+        );
+        assert_eq!(o.status.code(), Some(130), "{signal}");
+        assert!(String::from_utf8_lossy(&o.stderr).contains("interrupted"));
+        let left: Vec<_> = std::fs::read_dir(&d)
+            .unwrap()
+            .map(|e| e.unwrap().file_name())
+            .collect();
+        assert!(
+            left.is_empty() && !staging.exists(),
+            "{signal}: an interrupted run left {left:?}"
+        );
+        let _ = std::fs::remove_dir_all(&d);
+    }
+}
+
+/// Issue 39: SIGKILL runs no handler, and its staging directory (named with the dead PID) was
+/// left for ever; the next run writing beside it removes it and says so.
+#[test]
+fn a_killed_runs_staging_directory_is_removed_by_the_next_run_beside_it() {
+    let d = scratch("sigkill");
+    let (mut child, staging) = start_long_study(&d);
+    send("-KILL", child.id());
+    let _ = child.wait().unwrap();
+    assert!(staging.exists(), "SIGKILL leaves the staging directory");
+    let next = d.join("next");
+    let o = qrm(
+        &[
+            "pqrm",
+            "study",
+            "--trials",
+            "2",
+            "--out",
+            next.to_str().unwrap(),
+        ],
+        "",
+    );
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{err}");
     assert!(
-        !out.exists() && !staging.exists(),
-        "an interrupted run left output behind"
+        !staging.exists(),
+        "the dead run's staging directory is still there"
+    );
+    assert!(
+        err.contains("removed") && err.contains(".study.partial-"),
+        "the removal is not said: {err}"
     );
     let _ = std::fs::remove_dir_all(&d);
 }

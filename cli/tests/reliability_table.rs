@@ -182,6 +182,33 @@ fn surfaces() -> Vec<Surface> {
             false,
         ),
         s(
+            "saved map (binary)",
+            "saved_map/left-right.pqrm",
+            File {
+                args: &["reason", "check", "{file}"],
+                name: "map.pqrm",
+            },
+            false,
+        ),
+        s(
+            "study config (TOML, --config)",
+            "study_config/small-monte-carlo.toml",
+            File {
+                args: &[
+                    "study",
+                    "run",
+                    "monte-carlo",
+                    "--quick",
+                    "--config",
+                    "{file}",
+                    "--out",
+                    "{out}",
+                ],
+                name: "config.toml",
+            },
+            true,
+        ),
+        s(
             "pqrm prob line (stdin)",
             "prob_line/readme.json",
             Stdin(&[
@@ -437,7 +464,18 @@ fn every_surface_meets_every_bad_input_with_a_typed_error_or_a_clean_result() {
          value can be legitimate); *error* is exit 1 with the message shown (first 110 \
          characters). Every failing run that takes `--out` is checked to leave no output \
          directory. Deeper, in-process coverage: the fuzz targets in `fuzz/` \
-         (`tests/tests/fuzz_corpus.rs` runs them over their corpus and 5,000 mutations each).\n\n",
+         (`tests/tests/fuzz_corpus.rs` runs them over their corpus and 5,000 mutations each).\n\n\
+         **A stopped run.** Ctrl-C, SIGTERM and SIGHUP (what `timeout`, `kill`, systemd and job \
+         schedulers send) stop a run within a second: it says `interrupted`, removes its \
+         unfinished output (the hidden `.NAME.partial-PID` beside `--out`) and exits 130 \
+         (`cli/tests/interrupt_cli.rs`). SIGKILL, an abort or a power cut run no handler and \
+         leave that directory; the next run that writes beside it removes every such directory \
+         whose process no longer runs and says so on stderr (where running processes cannot \
+         be told, without `/proc`, nothing is removed). Files are never half-written: each is \
+         written beside its name and renamed.\n\n\
+         **Caches.** The derived tables cached on disk (`~/.cache/qrm`, `QRM_CACHE_DIR`) carry a \
+         checksum of their contents; a file that does not verify is derived again and \
+         replaced, never believed.\n\n",
     );
     for s in surfaces() {
         doc.push_str(&format!(

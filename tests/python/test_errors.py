@@ -46,3 +46,19 @@ def test_each_class_is_raised(tmp_path):
 def test_options_are_keyword_only():
     with pytest.raises(TypeError):
         qrm.Pqrm(qrm.Calculus.builtin("edc"), 100)  # samples must be given by name
+
+
+def test_nan_in_a_study_config_is_refused_by_field_not_read_as_unset():
+    """Issue 39: NaN went through JSON as null, i.e. "not set" (gating off, every frame)."""
+    cfg = qrm.studies.config("monte-carlo")
+    cfg["floor"] = float("nan")
+    with pytest.raises(qrm.InvalidInput, match="`floor`"):
+        qrm.studies.run("monte-carlo", cfg)
+    cfg = qrm.studies.config("monte-carlo")
+    cfg["sigmas"] = [1.0, float("inf")]
+    with pytest.raises(qrm.InvalidInput, match=r"`sigmas\[1\]`"):
+        qrm.distributed.shards("monte-carlo", cfg)
+    cfg = qrm.studies.config("monte-carlo")
+    cfg["floor"] = "x"
+    with pytest.raises(qrm.InvalidInput, match="field `floor`"):
+        qrm.studies.run("monte-carlo", cfg)

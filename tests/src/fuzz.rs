@@ -21,7 +21,7 @@ use qsr_core::{Calculus, Point2};
 pub type Target = fn(&[u8]);
 
 /// Every target by name (the names of `fuzz/fuzz_targets/*.rs` and `fuzz/corpus/*/`).
-pub const TARGETS: [(&str, Target); 15] = [
+pub const TARGETS: [(&str, Target); 16] = [
     ("spec_toml", spec_toml),
     ("spec_json", spec_json),
     ("classify_row", classify_row),
@@ -37,6 +37,7 @@ pub const TARGETS: [(&str, Target); 15] = [
     ("binary_network", binary_network),
     ("calculus_tables", calculus_tables),
     ("mcap", mcap),
+    ("study_config", study_config),
 ];
 
 /// Panics when a `Debug` rendering holds a NaN or an infinity.
@@ -209,19 +210,61 @@ pub fn world(data: &[u8]) {
     }
 }
 
-/// A saved PQRM map.
+/// A saved PQRM map, JSON or binary. Whatever a loader accepts must survive every later
+/// stage the `reason` and `pqrm` commands run on a map: its network by every selection, the
+/// check, inference, merging and saving again (issue 39: a set repeating an id loaded, then
+/// `reason check` panicked).
 pub fn saved_map(data: &[u8]) {
-    if let Some(t) = text(data)
-        && let Ok(m) = pqrm::Pqrm::from_json(t)
-    {
-        if let Some(h) = m.mean_entropy() {
-            assert!(h.is_finite(), "saved map: entropy {h}");
+    let loaded = match text(data) {
+        Some(t) if !pqrm::map_file::is_binary(data) => pqrm::Pqrm::from_json(t),
+        _ => pqrm::Pqrm::from_binary(data),
+    };
+    let Ok(m) = loaded else { return };
+    if let Some(h) = m.mean_entropy() {
+        assert!(h.is_finite(), "saved map: entropy {h}");
+    }
+    for (_, b) in m.iter().take(64) {
+        assert_finite("saved map beliefs", &b.probabilities());
+    }
+    // A loaded map must save again, in both formats.
+    let json = m.to_json().expect("saved map: loads but does not save");
+    let bin = m
+        .to_binary()
+        .expect("saved map: loads but does not save binary");
+    // The first few hundred maps a process accepts go through every later stage; each stage
+    // builds the calculus anew (~2 ms in a debug build, its reasoning tables ~6 ms), too slow
+    // for all 5,000 mutations of the corpus test.
+    static DEEP: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+    if DEEP.fetch_add(1, std::sync::atomic::Ordering::Relaxed) >= 400 {
+        return;
+    }
+    assert!(
+        pqrm::Pqrm::from_json(&json).is_ok(),
+        "saved map: its JSON does not load"
+    );
+    assert!(
+        pqrm::Pqrm::from_binary(&bin).is_ok(),
+        "saved map: its binary does not load"
+    );
+    // `pqrm merge`: with itself.
+    let _ = pqrm::robots::merge_maps(&[m.clone(), m.clone()]);
+    // `reason export`: every selection.
+    for selection in [
+        pqrm::reason::Selection::MostLikely,
+        pqrm::reason::Selection::AboveProbability(0.3),
+    ] {
+        let _ = pqrm::reason::to_network(&m, selection);
+    }
+    // `reason check` and `reason infer`, where their tables are cheap to derive.
+    if m.calculus().n_states() <= 9 && pqrm::reason::landmarks(&m).len() <= 12 {
+        let _ = pqrm::reason::check(&m);
+        if let Ok(mut inferrer) =
+            pqrm::reason::Inferrer::new(&m, pqrm::reason::InferOptions::default())
+        {
+            for i in inferrer.infer_unseen() {
+                assert_finite("inferred beliefs", &i);
+            }
         }
-        for (_, b) in m.iter().take(64) {
-            assert_finite("saved map beliefs", &b.probabilities());
-        }
-        // A loaded map must save again.
-        assert!(m.to_json().is_ok(), "saved map: loads but does not save");
     }
 }
 
@@ -309,4 +352,19 @@ pub fn calculus_tables(data: &[u8]) {
     net.constrain(0, 1, &first);
     let _ = close_binary(net.clone());
     let _ = solve_binary(net, &SolveOptions { max_nodes: 200 });
+}
+
+/// A study config file (`qrm study run NAME --config FILE`): its fields laid over every
+/// study's built-in config, then the study's own check (the one every front end runs before
+/// any work). Whatever the file holds, the check refuses or accepts; it never panics.
+pub fn study_config(data: &[u8]) {
+    let Some(t) = text(data) else { return };
+    let Ok(top) = studies::config::from_toml(t, "fuzz.toml") else {
+        return;
+    };
+    for study in studies::registry::STUDIES {
+        let mut config = study.config(false, 0);
+        studies::config::overlay(&mut config, top.clone());
+        let _ = study.check(&config);
+    }
 }

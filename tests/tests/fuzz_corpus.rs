@@ -131,6 +131,7 @@ fn run_one(name: &str, f: fn(&[u8]), input: &[u8], what: &str) {
 fn every_target_survives_its_corpus_and_mutations() {
     let start = std::time::Instant::now();
     for (i, (name, f)) in TARGETS.iter().enumerate() {
+        let t0 = std::time::Instant::now();
         let seeds = corpus(name);
         for (k, s) in seeds.iter().enumerate() {
             run_one(name, *f, s, &format!("corpus-{k}"));
@@ -145,7 +146,11 @@ fn every_target_survives_its_corpus_and_mutations() {
             let input = mutate(&mut rng, &seeds);
             run_one(name, *f, &input, &format!("mutation-{k}"));
         }
-        eprintln!("{name}: {} corpus + {n} mutated inputs", seeds.len());
+        eprintln!(
+            "{name}: {} corpus + {n} mutated inputs in {:.1} s",
+            seeds.len(),
+            t0.elapsed().as_secs_f64()
+        );
     }
     eprintln!("all targets in {:.1} s", start.elapsed().as_secs_f64());
 }

@@ -49,6 +49,36 @@ impl RangeBearingNoise {
         sigma_range: 0.15,
         sigma_bearing: 0.01,
     };
+
+    /// The largest bearing σ taken (rad): beyond a full turn a bearing is uniform whatever σ.
+    pub const MAX_SIGMA_BEARING: f64 = std::f64::consts::TAU;
+
+    /// Checks both σs before any file is read, so a bad flag is blamed, not a line of the
+    /// recording (issue 39: `--sigma-range 1e308` was reported as a non-finite covariance
+    /// at `Robot1_Measurement.dat:5`, and 2⁶⁴ as coinciding landmarks).
+    ///
+    /// # Errors
+    /// [`PqrmError::InvalidConfig`] naming the field and its value.
+    pub fn validate(&self) -> Result<()> {
+        let range_ok = self.sigma_range.is_finite()
+            && (0.0..=crate::observation::MAX_DISTANCE_M).contains(&self.sigma_range);
+        if !range_ok {
+            return Err(PqrmError::InvalidConfig(format!(
+                "sigma_range = {:?} m: the range noise must be finite, >= 0 and at most {:e} m",
+                self.sigma_range,
+                crate::observation::MAX_DISTANCE_M
+            )));
+        }
+        let bearing_ok = self.sigma_bearing.is_finite()
+            && (0.0..=Self::MAX_SIGMA_BEARING).contains(&self.sigma_bearing);
+        if !bearing_ok {
+            return Err(PqrmError::InvalidConfig(format!(
+                "sigma_bearing = {:?} rad: the bearing noise must be finite, >= 0 and at most 2π",
+                self.sigma_bearing
+            )));
+        }
+        Ok(())
+    }
 }
 
 fn read(path: &Path) -> Result<String> {
@@ -378,6 +408,7 @@ fn read_mrclam_barcodes(bc: &Path) -> Result<BTreeMap<u32, u32>> {
 /// [`PqrmError::Io`] for a missing file, [`PqrmError::Parse`] for malformed lines,
 /// [`PqrmError::InvalidConfig`] for a negative noise.
 pub fn read_mrclam(dir: &Path, noise: RangeBearingNoise) -> Result<Dataset> {
+    noise.validate()?;
     let file = |name: &str| -> PathBuf { dir.join(name) };
     let truth = read_mrclam_truth(&file("Landmark_Groundtruth.dat"))?;
     let barcode_to_subject = read_mrclam_barcodes(&file("Barcodes.dat"))?;

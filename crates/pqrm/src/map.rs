@@ -455,7 +455,7 @@ impl Pqrm {
     }
 
     /// A map from a file's contents, checked: every row a normalised log-distribution over
-    /// the calculus's states, no set twice.
+    /// the calculus's states, every set of three distinct ids, no set twice.
     ///
     /// # Errors
     /// [`PqrmError::Format`] naming the first bad set; calculus errors for a bad spec.
@@ -485,6 +485,13 @@ impl Pqrm {
         }
         map.store.reserve_exact(n);
         for (i, ids) in parts.sets.iter().enumerate() {
+            // A set relates three landmarks: one with a repeated id has no state in any
+            // calculus, and every later stage (networks, reasoning, merging) assumes three.
+            if ids[0] == ids[1] || ids[0] == ids[2] || ids[1] == ids[2] {
+                return Err(PqrmError::Format(format!(
+                    "set {ids:?} repeats a landmark id (a set relates three distinct landmarks)"
+                )));
+            }
             let set = LandmarkSet(ids.map(LandmarkId));
             if map.store.slot(&set).is_some() {
                 return Err(PqrmError::Format(format!("set {ids:?} is recorded twice")));

@@ -30,6 +30,12 @@ pub struct Observation {
     pub cov: [[f64; 2]; 2],
 }
 
+/// The largest distance (m) qrm takes as a noise σ or an outlier spread: a thousand kilometres,
+/// beyond any range sensor. Larger values overflow when squared into a covariance (1e308) or
+/// leave samples unable to tell landmarks metres apart (2⁶⁴ m), and then a later stage blames
+/// the recording or "coinciding landmarks" instead of the flag.
+pub const MAX_DISTANCE_M: f64 = 1e6;
+
 /// Relative tolerance for the symmetry and semi-definiteness checks of a covariance.
 const COV_TOL: f64 = 1e-9;
 

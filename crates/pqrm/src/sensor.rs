@@ -62,12 +62,17 @@ impl SensorModel {
                 "student-t degrees of freedom must be finite and > 0, got {nu}"
             ))),
             Self::Outliers { rate, spread }
-                if (0.0..1.0).contains(&rate) && spread.is_finite() && spread > 0.0 =>
+                if (0.0..1.0).contains(&rate)
+                    && spread.is_finite()
+                    && spread > 0.0
+                    && spread <= crate::observation::MAX_DISTANCE_M =>
             {
                 Ok(())
             }
             Self::Outliers { rate, spread } => Err(PqrmError::InvalidConfig(format!(
-                "outlier rate must be in [0, 1) and spread finite and > 0 m, got rate {rate}, spread {spread}"
+                "outliers:{rate:?},{spread:?}: the outlier rate must be in [0, 1) and the spread \
+                 finite, > 0 and at most {:e} m",
+                crate::observation::MAX_DISTANCE_M
             ))),
         }
     }

@@ -154,6 +154,18 @@ impl MonteCarloConfig {
                 self.sigmas
             ));
         }
+        // The detail levels run as levels too (issue 39: `detail_sigmas = [-1]` ran and
+        // reported a verdict "at σ_R = -1 m").
+        if self
+            .detail_sigmas
+            .iter()
+            .any(|s| !(s.is_finite() && *s >= 0.0))
+        {
+            return bad(format!(
+                "detail_sigmas: noise levels must be finite and >= 0: {:?}",
+                self.detail_sigmas
+            ));
+        }
         if self.trials == 0 {
             return bad("trials must be >= 1".into());
         }
@@ -167,6 +179,23 @@ impl MonteCarloConfig {
         let pos = [self.world, self.radius, self.step_deg, self.range];
         if pos.iter().any(|v| !(v.is_finite() && *v > 0.0)) {
             return bad("world, radius, step and range must be finite and > 0".into());
+        }
+        // Distances beyond any sensor's (1e308 m squared overflows in the covariances).
+        let max = crate::observation::MAX_DISTANCE_M;
+        for (field, v) in [
+            ("world", self.world),
+            ("radius", self.radius),
+            ("range", self.range),
+        ] {
+            if v > max {
+                return bad(format!("{field} = {v:?} m: at most {max:e} m"));
+            }
+        }
+        if self.step_deg > 360.0 {
+            return bad(format!(
+                "step_deg = {}: a measurement every at most 360°",
+                self.step_deg
+            ));
         }
         // The calculi load and merge (a spec file that is missing or not a merge of the first
         // fails here, not after the first outputs).

@@ -414,3 +414,36 @@ fn non_finite_numbers_are_refused_with_their_field() {
         e.len()
     );
 }
+
+/// Issue 39: a saved map whose set repeats an id loaded (JSON, or binary with a valid CRC),
+/// then `qrm reason check` panicked and `qrm pqrm merge` copied the set on.
+#[test]
+fn regression_a_saved_map_whose_set_repeats_an_id_is_refused_by_both_loaders() {
+    let m = build("left-right", &scans(3), Orderings::All);
+    let json = m.to_json().unwrap();
+    let first = m.iter().next().unwrap().0.ids();
+    let [a, b, c] = first;
+    let bad = json.replacen(
+        &format!("\"set\":[{a},{b},{c}]"),
+        &format!("\"set\":[{a},{a},{c}]"),
+        1,
+    );
+    assert_ne!(
+        bad, json,
+        "the test could not find the first set in the JSON"
+    );
+    let err = Pqrm::from_json(&bad).unwrap_err().to_string();
+    assert!(err.contains("repeats a landmark id"), "{err}");
+
+    // The binary file: the first set's second id made the first's, checksum made valid again.
+    let mut bytes = m.to_binary().unwrap();
+    let header_len = u32::from_le_bytes(bytes[12..16].try_into().unwrap()) as usize;
+    let sets_at = 32 + header_len;
+    let first_id: [u8; 4] = bytes[sets_at..sets_at + 4].try_into().unwrap();
+    bytes[sets_at + 4..sets_at + 8].copy_from_slice(&first_id);
+    let body = bytes.len() - 4;
+    let crc = crc32fast::hash(&bytes[..body]);
+    bytes[body..].copy_from_slice(&crc.to_le_bytes());
+    let err = Pqrm::from_binary(&bytes).unwrap_err().to_string();
+    assert!(err.contains("repeats a landmark id"), "{err}");
+}

@@ -23,17 +23,65 @@ pub fn remove_unfinished() -> Vec<PathBuf> {
     dirs
 }
 
+/// The process id a staging directory's name carries (`.<name>.partial-<pid>`), if it is one.
+fn staging_pid(file_name: &str) -> Option<u32> {
+    let (head, pid) = file_name.rsplit_once(".partial-")?;
+    (head.starts_with('.') && head.len() > 1 && !pid.is_empty())
+        .then(|| pid.parse().ok())
+        .flatten()
+}
+
+/// Whether process `pid` is running on this machine: `None` where that cannot be told without
+/// unsafe code (no `/proc`), and then nothing is removed.
+fn process_is_alive(pid: u32) -> Option<bool> {
+    let proc = Path::new("/proc");
+    proc.join("self")
+        .exists()
+        .then(|| proc.join(pid.to_string()).exists())
+}
+
+/// Removes the staging directories in `dir` left by processes that no longer run (killed by
+/// SIGKILL, an abort or a power cut, where no handler runs) and returns them.
+fn remove_stale(dir: &Path) -> Vec<PathBuf> {
+    let Ok(entries) = std::fs::read_dir(dir) else {
+        return Vec::new();
+    };
+    let own = std::process::id();
+    let mut removed = Vec::new();
+    for entry in entries.flatten() {
+        let name = entry.file_name();
+        let Some(pid) = name.to_str().and_then(staging_pid) else {
+            continue;
+        };
+        let is_dir = entry.file_type().is_ok_and(|t| t.is_dir());
+        if pid != own && is_dir && process_is_alive(pid) == Some(false) {
+            let path = entry.path();
+            if std::fs::remove_dir_all(&path).is_ok() {
+                removed.push(path);
+            }
+        }
+    }
+    removed.sort();
+    removed
+}
+
 /// An output directory written whole or not at all: results go into a hidden sibling
 /// `.<name>.partial-<pid>` and are moved into `<name>` by [`Staging::commit`] once everything
 /// succeeded. Dropped without a commit (an error, a panic) or removed by
 /// [`remove_unfinished`], the staging directory is gone: nothing is left that a user could
 /// take for a result. Files already in `<name>` from earlier runs stay unless this run writes
 /// the same names.
+///
+/// A process stopped where no handler runs (SIGKILL, an abort) leaves its staging directory;
+/// the next [`Staging`] made in the same directory removes every such directory whose process
+/// no longer runs ([`Staging::removed_stale`] lists them, for the caller to say so). Where
+/// running processes cannot be told (no `/proc`), none is removed.
 #[derive(Debug)]
 pub struct Staging {
     target: PathBuf,
     staging: PathBuf,
     committed: bool,
+    stale: Vec<PathBuf>,
 }
 
 impl Staging {
@@ -57,6 +105,7 @@ impl Staging {
             )));
         }
         std::fs::create_dir_all(&parent).map_err(FileError::io("creating", &parent))?;
+        let stale = remove_stale(&parent);
         let staging = parent.join(format!(
             ".{}.partial-{}",
             name.to_string_lossy(),
@@ -71,7 +120,14 @@ impl Staging {
             target: out.to_path_buf(),
             staging,
             committed: false,
+            stale,
         })
+    }
+
+    /// The staging directories of dead processes that [`Staging::new`] removed beside this one.
+    #[must_use]
+    pub fn removed_stale(&self) -> &[PathBuf] {
+        &self.stale
     }
 
     /// Where to write.
@@ -157,6 +213,12 @@ impl StagedFile {
         &self.file
     }
 
+    /// As [`Staging::removed_stale`].
+    #[must_use]
+    pub fn removed_stale(&self) -> &[PathBuf] {
+        self.stage.removed_stale()
+    }
+
     /// Moves the file to its name (replacing what was there).
     ///
     /// # Errors
@@ -199,6 +261,49 @@ mod tests {
         let names: Vec<_> = std::fs::read_dir(&root).unwrap().collect();
         assert_eq!(names.len(), 1, "only `out` is left beside it");
         std::fs::remove_dir_all(&root).unwrap();
+    }
+
+    /// Issue 39: a run killed by SIGKILL left `.out.partial-PID` for ever (the name carries the
+    /// PID, so no later run matched it).
+    #[test]
+    fn regression_a_dead_processs_staging_directory_is_removed_by_the_next_run_beside_it() {
+        let root = std::env::temp_dir().join(format!("qrm-files-stale-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&root);
+        std::fs::create_dir_all(&root).unwrap();
+        // A process that has exited: its PID no longer runs.
+        let mut child = std::process::Command::new("true").spawn().unwrap();
+        let dead = child.id();
+        child.wait().unwrap();
+        let stale = root.join(format!(".run.partial-{dead}"));
+        std::fs::create_dir_all(stale.join("figures")).unwrap();
+        std::fs::write(stale.join("figures/half.svg"), "<svg").unwrap();
+        // One of a running process (this one's parent), and things that only look alike.
+        let parent = std::os::unix::process::parent_id();
+        let live = root.join(format!(".other.partial-{parent}"));
+        std::fs::create_dir_all(&live).unwrap();
+        let file = root.join(format!(".notes.partial-{dead}"));
+        std::fs::write(&file, "a file, not a staging directory").unwrap();
+        let user = root.join(format!("run.partial-{dead}"));
+        std::fs::create_dir_all(&user).unwrap();
+
+        let s = Staging::new(&root.join("next")).unwrap();
+        if process_is_alive(dead).is_some() {
+            assert_eq!(s.removed_stale(), std::slice::from_ref(&stale));
+            assert!(!stale.exists());
+        }
+        assert!(live.exists() && file.exists() && user.exists());
+        drop(s);
+        std::fs::remove_dir_all(&root).unwrap();
+    }
+
+    #[test]
+    fn staging_names_are_told_apart_from_others() {
+        assert_eq!(staging_pid(".run.partial-42"), Some(42));
+        assert_eq!(staging_pid("..x.file.partial-7"), Some(7));
+        assert_eq!(staging_pid("run.partial-42"), None);
+        assert_eq!(staging_pid(".partial-42"), None);
+        assert_eq!(staging_pid(".run.partial-"), None);
+        assert_eq!(staging_pid(".run.partial-4x"), None);
     }
 
     #[test]

@@ -101,12 +101,22 @@ impl ReadOptions {
     }
 
     fn validate(&self) -> Result<()> {
-        let ok = |x: f64| x.is_finite() && x > 0.0;
-        if !ok(self.lidar.recognition_tolerance) || !ok(self.lidar.sigma) {
-            return Err(LogError::Invalid(format!(
-                "lidar recognition tolerance {} and σ {} must be finite and > 0",
-                self.lidar.recognition_tolerance, self.lidar.sigma
-            )));
+        // Bounded like every distance σ (pqrm's MAX_DISTANCE_M): `--lidar-sigma 1e308` was
+        // blamed on a message of the log (issue 39).
+        let max = pqrm::observation::MAX_DISTANCE_M;
+        let ok = |x: f64| x.is_finite() && x > 0.0 && x <= max;
+        for (name, v) in [
+            ("lidar sigma (--lidar-sigma)", self.lidar.sigma),
+            (
+                "lidar recognition tolerance",
+                self.lidar.recognition_tolerance,
+            ),
+        ] {
+            if !ok(v) {
+                return Err(LogError::Invalid(format!(
+                    "{name} = {v:?} m: must be finite, > 0 and at most {max:e} m"
+                )));
+            }
         }
         for (name, v) in [("range_min", self.range_min), ("range_max", self.range_max)] {
             if let Some(v) = v

@@ -101,9 +101,16 @@ pub fn builtin_spec(name: &str) -> Result<CalculusSpec> {
     {
         return Ok(star_spec(m));
     }
+    if let Some(e) = crate::binary::name_out_of_range(name) {
+        return Err(e);
+    }
     Err(QsrError::UnknownCalculus {
         name: name.to_owned(),
-        known: format!("{}, star-m (even m, 2..=32)", BUILTIN_NAMES.join(", ")),
+        known: format!(
+            "{}, star-m (even m, 2..=32); binary: opra-M (1 ≤ M ≤ {})",
+            BUILTIN_NAMES.join(", "),
+            crate::binary::MAX_OPRA_M
+        ),
     })
 }
 

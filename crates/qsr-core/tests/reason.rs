@@ -361,6 +361,19 @@ fn json_and_sparq_forms_give_the_same_network() {
     assert_eq!(Network::from_sparq_str(&dc, &a.to_sparq()).unwrap(), a);
     let back = Network::from_json_str(&dc, &a.to_json().to_string()).unwrap();
     assert_eq!(back, a);
+    // The streamed writers give the bytes of the values (issue 39: the CLI now streams).
+    let mut streamed = Vec::new();
+    a.write_json(&mut streamed).unwrap();
+    assert_eq!(
+        String::from_utf8(streamed).unwrap(),
+        a.to_json().to_string()
+    );
+    let mut streamed = Vec::new();
+    a.write_constraints_json(&mut streamed).unwrap();
+    assert_eq!(
+        String::from_utf8(streamed).unwrap(),
+        a.constraints_json().to_string()
+    );
 }
 
 #[test]

@@ -148,6 +148,14 @@ impl Belief {
                     return Err(bad("a variance is not positive"));
                 }
                 let det = a * d - b * b2;
+                // Issue 39: an indefinite matrix (det < 0: |cov_xy| above √(cov_xx·cov_yy)) was
+                // called a line; only det ≈ 0 is one.
+                if det < -1e-12 * a * d {
+                    return Err(bad(
+                        "not positive semi-definite: |cov_xy| exceeds √(cov_xx · cov_yy), no \
+                         Gaussian has this covariance",
+                    ));
+                }
                 if det <= 1e-12 * a * d {
                     return Err(bad("singular: the belief is a line, not an area"));
                 }
@@ -252,5 +260,39 @@ impl BeliefSet {
                 ]
             },
         )
+    }
+}
+
+#[cfg(test)]
+#[allow(clippy::unwrap_used)] // tests: a panic is the failure report
+mod tests {
+    use super::*;
+
+    fn refusal(cov: [[f64; 2]; 2]) -> String {
+        BeliefSet::new(vec![Belief::Gaussian {
+            mean: [0.0, 0.0],
+            cov,
+        }])
+        .unwrap_err()
+        .to_string()
+    }
+
+    /// Issue 39: an indefinite covariance was called "singular: the belief is a line".
+    #[test]
+    fn regression_an_indefinite_covariance_is_not_called_a_line() {
+        let e = refusal([[1.0, 2.0], [2.0, 1.0]]);
+        assert!(
+            e.contains("not positive semi-definite") && !e.contains("line"),
+            "{e}"
+        );
+        let e = refusal([[1.0, 1.0], [1.0, 1.0]]);
+        assert!(e.contains("line"), "{e}");
+        assert!(
+            BeliefSet::new(vec![Belief::Gaussian {
+                mean: [0.0, 0.0],
+                cov: [[1.0, 0.5], [0.5, 1.0]],
+            }])
+            .is_ok()
+        );
     }
 }

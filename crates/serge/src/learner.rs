@@ -54,12 +54,58 @@ impl CalculusLearner {
         }
     }
 
+    /// The most memory a learner may ask for (bytes): its samples and cell masses.
+    pub const MAX_BYTES: f64 = 4.0 * (1u64 << 30) as f64;
+
+    /// Bytes the learner will hold at most: `samples` points (16 B) and `cells²` masses (8 B)
+    /// per selected triplet, and SERGE's work arrays over the cells (a few per cell).
+    #[must_use]
+    pub fn estimated_bytes(&self) -> f64 {
+        let triplets = self.selection.max_triplets as f64;
+        let cells = (self.cells as f64).powi(2);
+        triplets * (self.samples as f64 * 16.0 + cells * 8.0) + cells * 64.0
+    }
+
+    /// Checks the sizes before any work: samples, cells and triplets of at least one, and
+    /// the memory they ask for within [`CalculusLearner::MAX_BYTES`] (issue 39: `--samples
+    /// 18446744073709551615` panicked with a capacity overflow).
+    ///
+    /// # Errors
+    /// [`crate::SergeError::InvalidParameter`] naming the field and the estimate.
+    pub fn validate(&self) -> Result<()> {
+        for (field, v) in [
+            ("samples", self.samples),
+            ("cells", self.cells),
+            ("max_triplets", self.selection.max_triplets),
+        ] {
+            if v == 0 {
+                return Err(crate::SergeError::InvalidParameter(format!(
+                    "{field} = 0: at least 1"
+                )));
+            }
+        }
+        let bytes = self.estimated_bytes();
+        if bytes > Self::MAX_BYTES {
+            return Err(crate::SergeError::InvalidParameter(format!(
+                "samples = {}, cells = {} and max_triplets = {} would hold about {:.1} GB; the \
+                 limit is {:.1} GB: fewer samples, cells or triplets",
+                self.samples,
+                self.cells,
+                self.selection.max_triplets,
+                bytes / 1e9,
+                Self::MAX_BYTES / 1e9
+            )));
+        }
+        Ok(())
+    }
+
     /// Selects triplets from `frames` (the landmarks each frame saw) and learns from them.
     ///
     /// # Errors
-    /// [`crate::SergeError::InvalidParameter`] when no set was seen together often enough;
-    /// as [`CalculusLearner::learn_from`].
+    /// [`crate::SergeError::InvalidParameter`] when no set was seen together often enough or
+    /// for sizes [`CalculusLearner::validate`] refuses; as [`CalculusLearner::learn_from`].
     pub fn learn(&self, frames: &[Vec<Sighting>]) -> Result<(Selected, SalientRegionMap)> {
+        self.validate()?;
         let selected = self.selection.select(frames)?;
         let map = self.learn_from(&selected)?;
         Ok((selected, map))
@@ -70,6 +116,7 @@ impl CalculusLearner {
     /// # Errors
     /// SERGE's: a window or grid that is not one, μ or σ out of range.
     pub fn learn_from(&self, selected: &Selected) -> Result<SalientRegionMap> {
+        self.validate()?;
         let n = selected.triplets.len();
         let seed = self.selection.seed;
         let beliefs = triplet_beliefs(&selected.observations, n, self.samples, seed)?;

@@ -283,6 +283,22 @@ fn check_extent(spec: &WorldSpec) -> Result<()> {
             },
         )?;
     }
+    // Clutter too (issue 39: a clutter disc of radius 1e39 or 2³² m was accepted, and the
+    // simulation ran for minutes).
+    for (i, c) in spec.clutter.iter().enumerate() {
+        check(
+            sized(&c.pos, c.radius) || !c.radius.is_finite() || c.radius <= 0.0,
+            || {
+                format!(
+                    "clutter {i}: position {:?} and radius {} must lie within \
+                     ±{MAX_WORLD_EXTENT:e} m (radius at least {} m)",
+                    c.pos,
+                    c.radius,
+                    MIN_WORLD_SIZE / 100.0
+                )
+            },
+        )?;
+    }
     for w in &spec.walls {
         check(
             w.start

@@ -49,16 +49,10 @@ impl std::fmt::Display for RecordingFormat {
 /// covariances (the other forms carry their own).
 ///
 /// # Errors
-/// [`StudyError::InvalidParameter`] for a negative or non-finite noise; the loaders' errors
+/// [`StudyError::Pqrm`] for a negative, huge or non-finite noise; the loaders' errors
 /// ([`StudyError::Pqrm`], [`StudyError::Log`]) naming the file, line and field.
 pub fn read(format: RecordingFormat, path: &Path, noise: RangeBearingNoise) -> Result<Dataset> {
-    let ok = |s: f64| s.is_finite() && s >= 0.0;
-    if !(ok(noise.sigma_range) && ok(noise.sigma_bearing)) {
-        return Err(StudyError::InvalidParameter(format!(
-            "noise standard deviations must be finite and >= 0, not {} m and {} rad",
-            noise.sigma_range, noise.sigma_bearing
-        )));
-    }
+    noise.validate()?;
     Ok(match format {
         RecordingFormat::Csv => read_csv(path)?,
         RecordingFormat::Mrclam => read_mrclam(path, noise)?,

@@ -183,8 +183,17 @@ impl<S> Default for Registered<S> {
 }
 
 fn read<S: Study>(config: &serde_json::Value) -> Result<S::Config> {
-    let c: S::Config = serde_json::from_value(config.clone())
-        .map_err(|e| StudyError::InvalidParameter(format!("config of `{}`: {e}", S::NAME)))?;
+    // The path to the field at fault: serde_json alone says "invalid type: null, expected
+    // f64" and leaves the user to guess which of forty fields (issue 39).
+    let c: S::Config = serde_path_to_error::deserialize(config.clone()).map_err(|e| {
+        let field = e.path().to_string();
+        let why = e.into_inner();
+        StudyError::InvalidParameter(if field == "." {
+            format!("config of `{}`: {why}", S::NAME)
+        } else {
+            format!("config of `{}`: field `{field}`: {why}", S::NAME)
+        })
+    })?;
     S::check(&c)?;
     Ok(c)
 }

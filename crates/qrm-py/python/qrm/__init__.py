@@ -158,7 +158,7 @@ def monte_carlo_shard(
     `progress` counts trials (one per level and trial).
     """
     records: List[types.MonteCarloRecord] = json.loads(
-        _qrm.monte_carlo_shard(json.dumps(dict(config)), start, count, progress=_progress_callback(progress))
+        _qrm.monte_carlo_shard(studies._config_json(config), start, count, progress=_progress_callback(progress))
     )
     return records
 
@@ -168,7 +168,7 @@ def monte_carlo_aggregate(
 ) -> types.MonteCarloResult:
     """Merges shard records (any order) into the study result."""
     texts = [json.dumps([dict(r) for r in s]) for s in shards]
-    result: types.MonteCarloResult = json.loads(_qrm.monte_carlo_aggregate(json.dumps(dict(config)), texts))
+    result: types.MonteCarloResult = json.loads(_qrm.monte_carlo_aggregate(studies._config_json(config), texts))
     result["confusion"] = [(float(sigma), matrix) for sigma, matrix in result["confusion"]]
     return result
 

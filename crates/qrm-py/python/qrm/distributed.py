@@ -18,18 +18,17 @@ Shards cross process boundaries as JSON text.
 
 from __future__ import annotations
 
-import json
 from typing import Any, Iterable, List, Mapping, Optional, Tuple
 
 from . import _qrm, types
-from .studies import _as_run
+from .studies import _as_run, _config_json
 from .studies import config as _config
 
 __all__ = ["aggregate", "run", "run_shard", "shards"]
 
 
 def _text(config: Mapping[str, Any]) -> str:
-    return json.dumps(dict(config))
+    return _config_json(config)
 
 
 def shards(name: str, config: Mapping[str, Any]) -> int:

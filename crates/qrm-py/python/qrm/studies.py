@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import base64
 import json
+import math
 import os
 from typing import Any, Dict, List, Mapping, Optional, Tuple, Union
 
@@ -54,7 +55,7 @@ def run(
     config with `quick=True`, else the thesis's) and returns its config, output and report.
     A config field of the wrong name or type raises `InvalidInput` naming it. `progress` counts
     the study's units of work (navigations, trials, folds)."""
-    text = None if config is None else json.dumps(dict(config))
+    text = None if config is None else _config_json(config)
     return _as_run(_qrm.studies_run(name, text, quick, seed, progress=_progress_callback(progress)))
 
 
@@ -69,6 +70,36 @@ def save(run: types.StudyRun, out: Union[str, "os.PathLike[str]"]) -> List[str]:
     return _qrm.studies_save(
         run["study"], json.dumps(run["config"]), json.dumps(run["output"]), os.fspath(out)
     )
+
+
+def _non_finite(value: Any, at: str) -> Optional[Tuple[str, float]]:
+    """The first NaN or infinity in a config, by dotted path (`grid.step`, `sigmas[1]`)."""
+    if isinstance(value, float) and not math.isfinite(value):
+        return at, value
+    if isinstance(value, Mapping):
+        for k, v in value.items():
+            found = _non_finite(v, f"{at}.{k}" if at else str(k))
+            if found:
+                return found
+    if isinstance(value, (list, tuple)):
+        for i, v in enumerate(value):
+            found = _non_finite(v, f"{at}[{i}]")
+            if found:
+                return found
+    return None
+
+
+def _config_json(config: Mapping[str, Any]) -> str:
+    """A config as JSON, refusing NaN and infinity by field: JSON has neither, and a config
+    value cannot mean "not set" by being NaN (the same rule as `qrm study run --set`)."""
+    found = _non_finite(dict(config), "")
+    if found:
+        field, value = found
+        raise _qrm.InvalidInput(
+            f"`{field}` = {value}: a config value must be a finite number (NaN and infinity "
+            "are not settings; leave a field out for its default)"
+        )
+    return json.dumps(dict(config), allow_nan=False)
 
 
 def _as_run(text: str) -> types.StudyRun:

@@ -5,7 +5,9 @@
 //! The cache stores converse and composition as JSON under
 //! `<dir>/<name>-<hash>.json`. The hash covers everything that determines the tables
 //! ([`BinaryCalculus::definition`]), so a changed derivation gets a new file, never a stale one;
-//! a file that fails to parse or does not match is derived again and replaced.
+//! a file that fails to parse or does not match is derived again and replaced. The tables carry
+//! a checksum of their own text (FNV-1a, as the ternary cache's): one changed digit still parses
+//! as JSON, and a cache that is believed unchecked gives wrong tables with exit 0 (issue 39).
 
 use std::path::{Path, PathBuf};
 
@@ -56,16 +58,31 @@ pub(crate) fn fnv1a(bytes: &[u8]) -> u64 {
     h
 }
 
+/// The tables as the file holds them.
 #[derive(Serialize, Deserialize)]
-struct CacheFile {
-    format: String,
-    definition: String,
+struct Tables {
     labels: Vec<String>,
     converse: Vec<Vec<u16>>,
     compose: Vec<Vec<Vec<u16>>>,
 }
 
-const FORMAT: &str = "qrm-binary-tables";
+#[derive(Serialize, Deserialize)]
+struct CacheFile {
+    format: String,
+    definition: String,
+    /// FNV-1a of `tables` as compact JSON.
+    checksum: String,
+    tables: Tables,
+}
+
+/// The checksum a file stores for its tables.
+fn checksum(t: &Tables) -> Result<String, String> {
+    let text = serde_json::to_string(t).map_err(|e| e.to_string())?;
+    Ok(format!("{:016x}", fnv1a(text.as_bytes())))
+}
+
+/// Version 2 added the checksum; a version-1 file fails to parse and is derived again.
+const FORMAT: &str = "qrm-binary-tables-2";
 
 /// The cache file of `c` in `dir`.
 #[must_use]
@@ -95,10 +112,17 @@ pub(crate) fn load_or_derive(c: &BinaryCalculus, dir: &Path) -> (BinaryTables, C
 }
 
 fn read(c: &BinaryCalculus, bytes: &[u8]) -> Result<BinaryTables, String> {
-    let f: CacheFile = serde_json::from_slice(bytes).map_err(|e| e.to_string())?;
-    if f.format != FORMAT || f.definition != c.definition() || f.labels != c.labels() {
+    let file: CacheFile = serde_json::from_slice(bytes).map_err(|e| e.to_string())?;
+    if file.format != FORMAT
+        || file.definition != c.definition()
+        || file.tables.labels != c.labels()
+    {
         return Err("written for another calculus or derivation".into());
     }
+    if checksum(&file.tables)? != file.checksum {
+        return Err("its checksum does not verify (damaged on disk?)".into());
+    }
+    let f = file.tables;
     let n = c.n_states();
     if f.converse.len() != n || f.compose.len() != n {
         return Err(format!("tables are not {n} × {n}"));
@@ -118,15 +142,19 @@ fn read(c: &BinaryCalculus, bytes: &[u8]) -> Result<BinaryTables, String> {
 
 fn write(c: &BinaryCalculus, t: &BinaryTables, path: &Path) -> std::io::Result<()> {
     let ids = |v: &[StateId]| v.iter().map(|s| s.0).collect::<Vec<_>>();
-    let file = CacheFile {
-        format: FORMAT.into(),
-        definition: c.definition(),
+    let tables = Tables {
         labels: c.labels().to_vec(),
         converse: t.converse.rows().iter().map(|r| ids(r)).collect(),
         compose: c
             .states()
             .map(|r| c.states().map(|s| ids(t.compose.get(r, s))).collect())
             .collect(),
+    };
+    let file = CacheFile {
+        format: FORMAT.into(),
+        definition: c.definition(),
+        checksum: checksum(&tables).map_err(std::io::Error::other)?,
+        tables,
     };
     let text = serde_json::to_vec(&file).map_err(std::io::Error::other)?;
     crate::text_file::write_whole(path, &text)

@@ -67,7 +67,7 @@ pub(crate) use cache::fnv1a;
 pub use cache::{CacheOutcome, cache_path, default_cache_dir};
 pub use calculus::{
     BINARY_NAMES, BinaryCalculus, BinaryFamily, DerivationCost, MAX_DERIVATION_STEPS, MAX_OPRA_M,
-    MAX_STAR_M, MAX_TABLE_BYTES, is_binary_name,
+    MAX_STAR_M, MAX_TABLE_BYTES, is_binary_name, name_out_of_range,
 };
 pub use closure::{BinaryClosure, BinaryContradiction, close_binary};
 pub use consistency::{BinarySolution, SolveOptions, SolveOutcome, solve_binary};

@@ -40,6 +40,10 @@ impl LearnedFromRecording {
     /// The reader's errors naming the file, line and field; [`StudyError::InvalidParameter`]
     /// naming the file when too few landmark sets were seen together or SERGE refuses.
     pub fn learn(learner: &CalculusLearner, input: &Path, name: &str) -> Result<Self> {
+        // The sizes first: a bad flag is blamed, not the file.
+        learner
+            .validate()
+            .map_err(|e| StudyError::InvalidParameter(e.to_string()))?;
         let scans = pqrm::loaders::read_csv(input)?.scans;
         let start = Instant::now();
         let (selected, map) = learner

@@ -80,14 +80,31 @@ fn check(config: &StudyConfig) -> Result<()> {
             "folds and grid must be at least 2, trials_per_belief and samples at least 1".into(),
         ));
     }
-    let sigmas_ok = config.sigma_for_mu.is_finite()
-        && config.sigma_for_mu >= 0.0
-        && !config.sigmas.is_empty()
-        && config.sigmas.iter().all(|s| s.is_finite() && *s >= 0.0);
-    if !sigmas_ok || config.mu_for_sigma == 0 || config.mus.as_ref().is_some_and(Vec::is_empty) {
+    let sigma_ok = |s: &f64| s.is_finite() && *s >= 0.0;
+    if !sigma_ok(&config.sigma_for_mu) {
+        return Err(StudyError::InvalidParameter(format!(
+            "sigma_for_mu = {}: σ must be finite and ≥ 0",
+            config.sigma_for_mu
+        )));
+    }
+    if config.sigmas.is_empty() || !config.sigmas.iter().all(sigma_ok) {
+        return Err(StudyError::InvalidParameter(format!(
+            "sigmas = {:?}: at least one σ, each finite and ≥ 0",
+            config.sigmas
+        )));
+    }
+    // μ = 0 is no resolution (issue 39: `mus = [0]` ran and reported μ = 1).
+    if config.mu_for_sigma == 0 {
         return Err(StudyError::InvalidParameter(
-            "σ values must be finite and ≥ 0 (at least one), μ values at least 1".into(),
+            "mu_for_sigma = 0: μ must be at least 1".into(),
         ));
+    }
+    if let Some(mus) = &config.mus
+        && (mus.is_empty() || mus.contains(&0))
+    {
+        return Err(StudyError::InvalidParameter(format!(
+            "mus = {mus:?}: at least one μ, each at least 1"
+        )));
     }
     Ok(())
 }
