@@ -12,9 +12,10 @@ use crate::study_cmd::Shown;
 /// `qrm demo`.
 #[derive(Debug, clap::Args)]
 pub struct DemoArgs {
-    /// Seed of the world, the sensors and the sampler.
-    #[arg(long, default_value_t = 1)]
-    pub seed: u64,
+    /// Seed of the world, the sensors and the sampler (default: the demo study's, as `qrm
+    /// study run demo` and `qrm.studies.run("demo")`).
+    #[arg(long)]
+    pub seed: Option<u64>,
     /// Goal landmark (default: the one whose plan is the longest that succeeds; see
     /// `run_rule` in summary.json).
     #[arg(long)]
@@ -31,7 +32,7 @@ pub struct DemoArgs {
 /// Runs the demo.
 pub fn run(a: DemoArgs) -> Result<()> {
     let config = DemoConfig {
-        seed: a.seed,
+        seed: a.seed.unwrap_or(<Demo as studies::Study>::DEFAULT_SEED),
         goal: a.goal,
         nav_range: a.nav_range,
     };

@@ -78,9 +78,9 @@ pub struct StudyFlags {
     /// instead of the thesis's.
     #[arg(long)]
     pub quick: bool,
-    /// Seed.
-    #[arg(long, default_value_t = 0)]
-    pub seed: u64,
+    /// Seed (default: the study's, 0 but for `demo`).
+    #[arg(long)]
+    pub seed: Option<u64>,
     /// Output directory.
     #[arg(long)]
     pub out: std::path::PathBuf,
@@ -89,10 +89,11 @@ pub struct StudyFlags {
 impl StudyFlags {
     /// Study `S`'s quick or full config with the seed: what the alias's own flags change.
     pub fn config<S: studies::Study>(&self) -> S::Config {
+        let seed = self.seed.unwrap_or(S::DEFAULT_SEED);
         if self.quick {
-            S::quick(self.seed)
+            S::quick(seed)
         } else {
-            S::full(self.seed)
+            S::full(seed)
         }
     }
 }

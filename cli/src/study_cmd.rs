@@ -26,9 +26,9 @@ pub enum StudyCmd {
         /// The thesis's settings (default: the quick ones).
         #[arg(long)]
         full: bool,
-        /// Seed written into the config.
-        #[arg(long, default_value_t = 0)]
-        seed: u64,
+        /// Seed written into the config (default: the study's, 0 but for `demo`).
+        #[arg(long)]
+        seed: Option<u64>,
     },
     /// Run a study: tables as CSV, figures, report.md and the config it ran in `--out`.
     Run(RunArgs),
@@ -97,9 +97,10 @@ pub struct ConfigArgs {
     /// `--set schedule.fallbacks=0` (a TOML value; a bare word is taken as a string).
     #[arg(long = "set", value_name = "KEY=VALUE")]
     pub set: Vec<String>,
-    /// Seed of the built-in config (a --config file's own seed wins).
-    #[arg(long, default_value_t = 0)]
-    pub seed: u64,
+    /// Seed of the built-in config (a --config file's own seed wins; default: the study's, 0
+    /// but for `demo`).
+    #[arg(long)]
+    pub seed: Option<u64>,
 }
 
 /// The registry's names, as the values clap accepts and lists.
@@ -118,6 +119,7 @@ pub fn run(cmd: StudyCmd) -> Result<()> {
         }
         StudyCmd::Config { name, full, seed } => {
             let study = studies::find(&name)?;
+            let seed = seed.unwrap_or(study.default_seed());
             outln!("{}", to_toml(&study.config(full, seed))?.trim_end())?;
             Ok(())
         }
@@ -182,7 +184,7 @@ fn aggregate(a: &AggregateArgs) -> Result<()> {
 /// file's fields over it, then each `--set`; checked before any work.
 fn config_of(a: &ConfigArgs) -> Result<(&'static dyn AnyStudy, serde_json::Value)> {
     let study = studies::find(&a.name)?;
-    let mut config = study.config(!a.quick, a.seed);
+    let mut config = study.config(!a.quick, a.seed.unwrap_or(study.default_seed()));
     if let Some(path) = &a.config {
         let text = qsr_core::text_file::read_text(path, qsr_core::text_file::MAX_INPUT_BYTES)
             .with_context(|| format!("reading {}", path.display()))?;

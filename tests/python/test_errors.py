@@ -62,3 +62,22 @@ def test_nan_in_a_study_config_is_refused_by_field_not_read_as_unset():
     cfg["floor"] = "x"
     with pytest.raises(qrm.InvalidInput, match="field `floor`"):
         qrm.studies.run("monte-carlo", cfg)
+
+
+def test_arguments_of_the_wrong_type_are_invalid_input_and_type_errors():
+    """Issue 40: a 1-D array, float ids, a string array and an int32 `out=` raised a bare
+    TypeError, not a qrm error; `qrm.InvalidType` is both (an InvalidInput, so a ValueError)."""
+    edc = qrm.Calculus.builtin("edc")
+    cases = [
+        lambda: edc.classify(np.zeros(6)),
+        lambda: edc.classify(np.array([["a"] * 6])),
+        lambda: edc.classify(np.zeros((2, 6)), out=np.zeros(2, dtype=np.int32)),
+        lambda: qrm.Pqrm(edc, samples=10).update(
+            0.0, np.array([0.5, 1.5, 2.5]), np.zeros((3, 2)), np.tile(np.eye(2), (3, 1, 1))
+        ),
+    ]
+    for call in cases:
+        with pytest.raises(qrm.InvalidInput) as e:
+            call()
+        assert isinstance(e.value, TypeError) and isinstance(e.value, ValueError)
+        assert isinstance(e.value, qrm.InvalidType)

@@ -47,6 +47,68 @@ FORK_AFTER_CALL = textwrap.dedent(
 )
 
 
+# Issue 40: once the parent had loaded a map (its rows are checked in parallel), a forked
+# child that loaded or unpickled one hung. Every loader, in the parent and then in children.
+FORK_AFTER_LOAD = textwrap.dedent(
+    """
+    import os, pickle, sys
+    import multiprocessing as mp
+    from concurrent.futures import ProcessPoolExecutor
+    import numpy as np
+    import qrm
+
+    DIR = sys.argv[1]
+    JSON, BIN, CSV = (os.path.join(DIR, n) for n in ("m.json", "m.pqrm", "obs.csv"))
+
+    def loaded(_):
+        maps = [
+            qrm.Pqrm.load(JSON),
+            qrm.Pqrm.load(BIN),
+            qrm.Pqrm.from_json(open(JSON).read()),
+            qrm.Pqrm.from_bytes(open(BIN, "rb").read()),
+            pickle.loads(pickle.dumps(qrm.Pqrm.load(BIN))),
+        ]
+        scans, _ = qrm.read_observations(CSV, "csv")
+        return [len(m) for m in maps] + [len(scans)]
+
+    if __name__ == "__main__":
+        edc = qrm.Calculus.builtin("edc")
+        m = qrm.Pqrm(edc, samples=200, seed=1)
+        xy = np.array([[0.0, 0.0], [0.0, 5.0], [-1.0, 2.0], [2.0, 1.0]])
+        m.update(0.0, np.array([1, 2, 3, 4]), xy, np.array([[0.01, 0.0, 0.01]] * 4))
+        m.save(JSON)
+        m.save(BIN)
+        with open(CSV, "w") as f:
+            f.write("t,robot,landmark,x,y,cxx,cxy,cyy\\n")
+            for i, (x, y) in enumerate(xy):
+                f.write(f"0,0,{i + 1},{x},{y},0.01,0,0.01\\n")
+        parent = loaded(0)  # the parent loads first
+        ctx = mp.get_context("fork")
+        with ProcessPoolExecutor(2, mp_context=ctx) as ex:
+            assert list(ex.map(len, [m] * 4)) == [len(m)] * 4  # unpickled in the children
+            children = list(ex.map(loaded, range(3)))
+        assert all(c == parent for c in children), (children, parent)
+        print("fork-ok", parent)
+    """
+)
+
+
+@pytest.mark.skipif(sys.platform != "linux", reason="fork is the default start method on Linux only")
+def test_fork_pool_after_loading_maps_does_not_hang(tmp_path):
+    script = tmp_path / "fork_after_load.py"
+    script.write_text(FORK_AFTER_LOAD)
+    env = dict(os.environ, RAYON_NUM_THREADS="2")
+    try:
+        done = subprocess.run(
+            [sys.executable, str(script), str(tmp_path)],
+            capture_output=True, text=True, timeout=120, env=env,
+        )
+    except subprocess.TimeoutExpired:
+        pytest.fail("a fork-based pool started after loading a map hung (> 120 s)")
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.startswith("fork-ok"), done.stdout
+
+
 @pytest.mark.skipif(sys.platform != "linux", reason="fork is the default start method on Linux only")
 def test_fork_pool_after_a_qrm_call_does_not_hang(tmp_path):
     script = tmp_path / "fork_after_call.py"

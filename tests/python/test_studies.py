@@ -150,8 +150,10 @@ def test_the_real_data_study_runs_from_python_as_on_the_command_line(mrclam_dir,
 
 def test_the_demo_runs_from_python_with_the_files_of_qrm_demo(qrm_bin, tmp_path):
     # issue 14 §2: the demo is a study; Python gets its log, summary and learned calculus as
-    # the CLI writes them, byte for byte
-    run = qrm.studies.run("demo", quick=True, seed=1)
+    # the CLI writes them, byte for byte. Issue 40: with no seed given, `qrm demo`, `qrm study
+    # run demo` and `qrm.studies.run("demo")` run one config (seed 1 was `qrm demo`'s alone).
+    run = qrm.studies.run("demo")
+    assert run["config"]["seed"] == qrm.studies.config("demo")["seed"]
     conforms(run, qt.StudyRun)
     files = {a["name"]: a for a in run["report"]["attachments"]}
     log = files["run.mcap"]["data"]
@@ -163,9 +165,13 @@ def test_the_demo_runs_from_python_with_the_files_of_qrm_demo(qrm_bin, tmp_path)
     assert plot["kind"] == "navigation" and plot["regions"] is not None
     assert len(plot["plan"]) == summary["plan_len"] + 1
     out = tmp_path / "demo"
-    subprocess.run([qrm_bin, "demo", "--seed", "1", "--out", str(out)], check=True,
-                   capture_output=True)
+    subprocess.run([qrm_bin, "demo", "--out", str(out)], check=True, capture_output=True)
     assert (out / "run.mcap").read_bytes() == log
+    study_out = tmp_path / "study-demo"
+    subprocess.run([qrm_bin, "study", "run", "demo", "--out", str(study_out)], check=True,
+                   capture_output=True)
+    assert (study_out / "run.mcap").read_bytes() == log
+    assert (study_out / "summary.json").read_text() == files["summary.json"]["text"]
     assert (out / "summary.json").read_text() == files["summary.json"]["text"]
     assert (out / "learned_calculus.json").read_text() == files["learned_calculus.json"]["text"]
     with pytest.raises(qrm.InvalidInput, match="nav_range"):

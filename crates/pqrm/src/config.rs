@@ -83,12 +83,25 @@ impl PqrmConfig {
                 self.temper
             )));
         }
-        if !(self.floor.is_finite() && self.floor >= 0.0) {
-            return Err(PqrmError::InvalidConfig(format!(
-                "floor must be finite and >= 0, got {}",
-                self.floor
-            )));
-        }
+        check_floor(self.floor)
+    }
+}
+
+/// The largest floor (pseudo-counts per state): far above any sample count a map uses, and
+/// small enough that `floor × states` stays finite (a floor of 1e308 made every likelihood
+/// `inf / inf`, NaN).
+pub const MAX_FLOOR: f64 = 1e6;
+
+/// Checks a floor: finite, `0..=MAX_FLOOR`.
+///
+/// # Errors
+/// [`PqrmError::InvalidConfig`] naming the field and its value.
+pub fn check_floor(floor: f64) -> Result<()> {
+    if floor.is_finite() && (0.0..=MAX_FLOOR).contains(&floor) {
         Ok(())
+    } else {
+        Err(PqrmError::InvalidConfig(format!(
+            "floor = {floor:?}: must be finite, >= 0 and at most {MAX_FLOOR:e} pseudo-counts"
+        )))
     }
 }

@@ -120,7 +120,9 @@ impl ReasonStudyConfig {
             ..InferOptions::default()
         }
         .validate()?;
-        if !(self.sigma_b.is_finite() && self.sigma_b >= 0.0) {
+        if !(self.sigma_b.is_finite()
+            && (0.0..=crate::observation::MAX_DISTANCE_M).contains(&self.sigma_b))
+        {
             return bad(format!(
                 "sigma_b must be finite and >= 0, got {}",
                 self.sigma_b
@@ -131,6 +133,32 @@ impl ReasonStudyConfig {
         }
         if self.calculi.is_empty() {
             return bad("no calculi".into());
+        }
+        // Part (b) simulates `world`: its geometry checked as the Monte Carlo study's, and its
+        // work estimated the same way (issue 39: `world.step_deg = 1e-12` and `world.world =
+        // -1` were accepted, nothing of `world` was checked).
+        self.world.validate_world()?;
+        let steps = (360.0 / self.world.step_deg).ceil();
+        let l = self.world.landmarks as f64;
+        let work = self.worlds_b as f64
+            * self.calculi.len() as f64
+            * steps
+            * l
+            * (l - 1.0)
+            * (l - 2.0)
+            * self.map.samples as f64;
+        if work > crate::study::MAX_STUDY_WORK {
+            return bad(format!(
+                "part (b) would classify about {work:.2e} triplet-samples (worlds_b = {}, {} \
+                 calculi, world.step_deg = {}, world.landmarks = {}, map.samples = {}); the \
+                 limit is {:.0e}",
+                self.worlds_b,
+                self.calculi.len(),
+                self.world.step_deg,
+                self.world.landmarks,
+                self.map.samples,
+                crate::study::MAX_STUDY_WORK
+            ));
         }
         self.map.validate()
     }

@@ -14,10 +14,11 @@ use numpy::{
     PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2, PyUntypedArrayMethods,
 };
 use pyo3::Borrowed;
-use pyo3::exceptions::PyTypeError;
 use pyo3::prelude::*;
 
-/// `np.asarray(obj)`, its dtype kind and shape; a TypeError naming `expected` if NumPy cannot
+use crate::errors::InvalidType;
+
+/// `np.asarray(obj)`, its dtype kind and shape; an `InvalidType` (a TypeError) naming `expected` if NumPy cannot
 /// read it as one array.
 fn as_array<'py>(
     obj: Borrowed<'_, 'py, PyAny>,
@@ -28,7 +29,7 @@ fn as_array<'py>(
         .import("numpy")?
         .call_method1("asarray", (obj,))
         .map_err(|e| {
-            PyTypeError::new_err(format!(
+            InvalidType::new_err(format!(
                 "expected {expected}; NumPy cannot read this {} as one array ({e})",
                 type_name(&obj)
             ))
@@ -67,7 +68,7 @@ fn shape_text(shape: &[usize]) -> String {
 }
 
 /// `np.asarray(obj).astype(float64)` when it holds real numbers (an empty array holds no
-/// other kind) in `ndim` dimensions; otherwise a TypeError saying `expected` and what came.
+/// other kind) in `ndim` dimensions; otherwise an `InvalidType` saying `expected` and what came.
 fn floats_nd<'py>(
     obj: &Bound<'py, PyAny>,
     expected: &str,
@@ -76,13 +77,13 @@ fn floats_nd<'py>(
     let (array, kind, shape) = as_array(obj.as_borrowed(), expected)?;
     let empty = shape.iter().product::<usize>() == 0;
     if !(matches!(kind.as_str(), "f" | "i" | "u") || empty) {
-        return Err(PyTypeError::new_err(format!(
+        return Err(InvalidType::new_err(format!(
             "{expected}, got dtype {}",
             dtype_name(&array)
         )));
     }
     if shape.len() != ndim {
-        return Err(PyTypeError::new_err(format!(
+        return Err(InvalidType::new_err(format!(
             "{expected}, got shape {}",
             shape_text(&shape)
         )));
@@ -131,13 +132,13 @@ pub(crate) fn ints1<'py>(
     let empty = shape.iter().product::<usize>() == 0;
     // An empty list reads as float64 in NumPy; it holds no float.
     if !(matches!(kind.as_str(), "i" | "u") || empty) {
-        return Err(PyTypeError::new_err(format!(
+        return Err(InvalidType::new_err(format!(
             "{expected}, got dtype {}",
             dtype_name(&array)
         )));
     }
     if shape.len() != 1 {
-        return Err(PyTypeError::new_err(format!(
+        return Err(InvalidType::new_err(format!(
             "{expected}, got shape {}",
             shape_text(&shape)
         )));
@@ -146,7 +147,7 @@ pub(crate) fn ints1<'py>(
         // uint64 beyond int64 would wrap in the cast
         let max: u64 = array.call_method0("max")?.extract()?;
         if i64::try_from(max).is_err() {
-            return Err(PyTypeError::new_err(format!(
+            return Err(InvalidType::new_err(format!(
                 "{expected}, got {max}, beyond int64"
             )));
         }
@@ -155,7 +156,7 @@ pub(crate) fn ints1<'py>(
     Ok(converted.cast_into::<PyArray1<i64>>()?.try_readonly()?)
 }
 
-/// An `out=` argument: a writable, contiguous int64 array of length `n`, or a TypeError that
+/// An `out=` argument: a writable, contiguous int64 array of length `n`, or an `InvalidType` that
 /// says so.
 pub(crate) fn out_ids<'py>(
     out: Bound<'py, PyAny>,
@@ -177,13 +178,13 @@ pub(crate) fn out_ids<'py>(
         }
     };
     let Ok(array) = out.cast::<PyArray1<i64>>() else {
-        return Err(PyTypeError::new_err(format!("{expected}, got {}", got())));
+        return Err(InvalidType::new_err(format!("{expected}, got {}", got())));
     };
     if array.len() != n {
-        return Err(PyTypeError::new_err(format!("{expected}, got {}", got())));
+        return Err(InvalidType::new_err(format!("{expected}, got {}", got())));
     }
     if array.try_readwrite().is_err() {
-        return Err(PyTypeError::new_err(format!(
+        return Err(InvalidType::new_err(format!(
             "{expected}, got a read-only or borrowed array"
         )));
     }

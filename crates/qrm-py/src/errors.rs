@@ -3,7 +3,8 @@
 //! ```text
 //! QrmError                                   (Exception)
 //! ├── InvalidInput        + ValueError          bad numbers, shapes, covariances, arity, configuration
-//! │   └── DegenerateFrame                       coincident reference points / landmarks
+//! │   ├── DegenerateFrame                       coincident reference points / landmarks
+//! │   └── InvalidType     + TypeError           an argument of a type or dtype qrm does not take
 //! ├── SpecError           + ValueError          malformed or invalid calculus spec, unknown calculus/state/op
 //! ├── UnsupportedError    + NotImplementedError an operation a calculus does not define
 //! ├── FormatError         + ValueError          malformed saved map or input file
@@ -32,6 +33,12 @@ class DegenerateFrame(InvalidInput):
     """Coincident reference points or landmarks (also a ValueError)."""
     __module__ = "qrm"
 
+class InvalidType(InvalidInput, TypeError):
+    """An argument of a type or dtype qrm does not take: a string array, float ids, a 1-D
+    array where rows are asked for, an int32 `out=` (an InvalidInput, so also a ValueError,
+    and a TypeError, what NumPy raises for such arguments)."""
+    __module__ = "qrm"
+
 class SpecError(QrmError, ValueError):
     """A calculus spec or name that is not valid (also a ValueError)."""
     __module__ = "qrm"
@@ -50,10 +57,11 @@ class IoError(QrmError, OSError):
 "#;
 
 /// The class names, in the order they are registered.
-const CLASSES: [&str; 7] = [
+const CLASSES: [&str; 8] = [
     "QrmError",
     "InvalidInput",
     "DegenerateFrame",
+    "InvalidType",
     "SpecError",
     "UnsupportedError",
     "FormatError",
@@ -95,6 +103,7 @@ exception!(
     QrmError,
     InvalidInput,
     DegenerateFrame,
+    InvalidType,
     SpecError,
     UnsupportedError,
     FormatError,

@@ -73,8 +73,10 @@ impl Pqrm {
     /// `sensor` is "gaussian", "student-t:NU" or "outliers:RATE,SPREAD"; `temper` ∈ (0, 1]
     /// scales each step's log-likelihood.
     #[new]
+    #[allow(clippy::too_many_arguments)] // the constructor's keyword arguments, and the token
     #[pyo3(signature = (calculus, *, samples = 1000, floor = 1.0, orderings = "all", seed = 0, sensor = "gaussian", temper = 1.0))]
     fn new(
+        py: Python<'_>,
         calculus: &Calculus,
         samples: usize,
         floor: f64,
@@ -100,7 +102,8 @@ impl Pqrm {
             sensor: pqrm::sensor::SensorModel::parse(sensor).map_err(perr)?,
             temper,
         };
-        pqrm::Pqrm::new(calculus.inner.clone(), config)
+        let calculus = calculus.inner.clone();
+        crate::pool::detach(py, || pqrm::Pqrm::new(calculus, config))
             .map(|inner| Self { inner })
             .map_err(perr)
     }
@@ -244,35 +247,39 @@ impl Pqrm {
 
     /// Loads a saved map, JSON or binary (told apart by its first bytes).
     #[staticmethod]
-    fn load(path: PathBuf) -> PyResult<Self> {
-        pqrm::Pqrm::load(&path)
+    fn load(py: Python<'_>, path: PathBuf) -> PyResult<Self> {
+        // In the fork-aware pool, as every call below: loading checks its rows in parallel,
+        // and a forked child of a parent that had touched rayon's global pool hung (issue 40).
+        crate::pool::detach(py, || pqrm::Pqrm::load(&path))
             .map(|inner| Self { inner })
             .map_err(perr)
     }
 
     /// The map as JSON text.
-    fn to_json(&self) -> PyResult<String> {
-        self.inner.to_json().map_err(perr)
+    fn to_json(&self, py: Python<'_>) -> PyResult<String> {
+        let inner = &self.inner;
+        crate::pool::detach(py, || inner.to_json()).map_err(perr)
     }
 
     /// A map from its JSON text (`to_json`).
     #[staticmethod]
-    fn from_json(text: &str) -> PyResult<Self> {
-        pqrm::Pqrm::from_json(text)
+    fn from_json(py: Python<'_>, text: &str) -> PyResult<Self> {
+        crate::pool::detach(py, || pqrm::Pqrm::from_json(text))
             .map(|inner| Self { inner })
             .map_err(perr)
     }
 
     /// The map in the binary map format (what a `.pqrm` file holds).
     fn to_bytes<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyBytes>> {
-        let bytes = self.inner.to_binary().map_err(perr)?;
+        let inner = &self.inner;
+        let bytes = crate::pool::detach(py, || inner.to_binary()).map_err(perr)?;
         Ok(PyBytes::new(py, &bytes))
     }
 
     /// A map from `to_bytes()` (checked: size, checksum, every belief).
     #[staticmethod]
-    fn from_bytes(data: &[u8]) -> PyResult<Self> {
-        pqrm::Pqrm::from_binary(data)
+    fn from_bytes(py: Python<'_>, data: &[u8]) -> PyResult<Self> {
+        crate::pool::detach(py, || pqrm::Pqrm::from_binary(data))
             .map(|inner| Self { inner })
             .map_err(perr)
     }

@@ -14,32 +14,35 @@ pub(crate) fn studies_list() -> Vec<(&'static str, &'static str)> {
         .collect()
 }
 
-/// The quick or full config of study `name` with `seed`, as JSON.
+/// The quick or full config of study `name` with `seed` (None: the study's default seed, as
+/// the command line's), as JSON.
 #[pyfunction]
-#[pyo3(signature = (name, full, seed))]
-pub(crate) fn studies_config(name: &str, full: bool, seed: u64) -> PyResult<String> {
+#[pyo3(signature = (name, full, seed = None))]
+pub(crate) fn studies_config(name: &str, full: bool, seed: Option<u64>) -> PyResult<String> {
     let study = studies::find(name).map_err(study_err)?;
-    Ok(study.config(full, seed).to_string())
+    Ok(study
+        .config(full, seed.unwrap_or(study.default_seed()))
+        .to_string())
 }
 
 /// Runs study `name` with `config` (JSON; None: the quick or full built-in with `seed`) and
 /// returns JSON `{"config": ..., "output": ..., "report": ...}`. Watched: Ctrl-C stops it,
 /// `progress(done, total)` is called as its units of work finish.
 #[pyfunction]
-#[pyo3(signature = (name, config, quick, seed, progress = None))]
+#[pyo3(signature = (name, config, quick, seed = None, progress = None))]
 pub(crate) fn studies_run(
     py: Python<'_>,
     name: &str,
     config: Option<&str>,
     quick: bool,
-    seed: u64,
+    seed: Option<u64>,
     progress: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<String> {
     let study = studies::find(name).map_err(study_err)?;
     let config: serde_json::Value = match config {
         Some(text) => serde_json::from_str(text)
             .map_err(|e| invalid(format!("config of `{name}` is not JSON: {e}")))?,
-        None => study.config(!quick, seed),
+        None => study.config(!quick, seed.unwrap_or(study.default_seed())),
     };
     study.check(&config).map_err(study_err)?;
     let ran = crate::pool::watched(py, progress, move |watch| study.run(&config, watch))?

@@ -30,6 +30,9 @@ pub trait Study {
     /// A file the whole output is worth writing to as JSON (`None`: too large to be useful
     /// beside the report's tables).
     const OUTPUT_FILE: Option<&'static str> = None;
+    /// The seed every front end runs when none is given (`qrm study run`, `qrm.studies.run`,
+    /// an alias such as `qrm demo`), so they run one config: 0 unless a study says why not.
+    const DEFAULT_SEED: u64 = 0;
     /// What it runs; every field has a meaning a user can change.
     type Config: Serialize + DeserializeOwned + Clone;
     /// What a run produced: records and summaries.
@@ -121,6 +124,8 @@ pub trait AnyStudy: Sync {
     fn about(&self) -> &'static str;
     /// [`Study::OUTPUT_FILE`].
     fn output_file(&self) -> Option<&'static str>;
+    /// [`Study::DEFAULT_SEED`].
+    fn default_seed(&self) -> u64;
     /// The quick or full config with `seed`, as JSON.
     fn config(&self, full: bool, seed: u64) -> serde_json::Value;
     /// Reads and checks a config.
@@ -208,6 +213,9 @@ impl<S: Study> AnyStudy for Registered<S> {
     }
     fn about(&self) -> &'static str {
         S::ABOUT
+    }
+    fn default_seed(&self) -> u64 {
+        S::DEFAULT_SEED
     }
     fn output_file(&self) -> Option<&'static str> {
         S::OUTPUT_FILE

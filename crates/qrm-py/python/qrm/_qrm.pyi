@@ -14,6 +14,7 @@ __all__ = [
     "QrmError",
     "InvalidInput",
     "DegenerateFrame",
+    "InvalidType",
     "SpecError",
     "UnsupportedError",
     "FormatError",
@@ -61,6 +62,9 @@ class InvalidInput(QrmError, ValueError):
 
 class DegenerateFrame(InvalidInput):
     """Coincident reference points or landmarks."""
+
+class InvalidType(InvalidInput, TypeError):
+    """An argument of a type or dtype qrm does not take (also a TypeError)."""
 
 class SpecError(QrmError, ValueError):
     """A calculus spec or name that is not valid."""
@@ -319,9 +323,9 @@ def navigate(
 def qlink_study(trial: str, quick: bool, pairs: Optional[int], seed: int, progress: _Callback = None) -> str: ...
 def qlink_field(quick: bool, trials: Optional[int], seed: int, progress: _Callback = None) -> str: ...
 def studies_list() -> List[Tuple[str, str]]: ...
-def studies_config(name: str, full: bool, seed: int) -> str: ...
+def studies_config(name: str, full: bool, seed: Optional[int] = None) -> str: ...
 def studies_run(
-    name: str, config: Optional[str], quick: bool, seed: int, progress: _Callback = None
+    name: str, config: Optional[str], quick: bool, seed: Optional[int] = None, progress: _Callback = None
 ) -> str: ...
 def studies_shards(name: str, config: str) -> int: ...
 def studies_run_shard(name: str, config: str, index: int, progress: _Callback = None) -> str: ...

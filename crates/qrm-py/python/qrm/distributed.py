@@ -57,7 +57,7 @@ def run(
     config: Optional[Mapping[str, Any]] = None,
     *,
     quick: bool = False,
-    seed: int = 0,
+    seed: Optional[int] = None,
     backend: str = "ray",
     max_workers: Optional[int] = None,
 ) -> types.StudyRun:

@@ -36,9 +36,10 @@ def available() -> List[Tuple[str, str]]:
     return [(n, a) for n, a in _qrm.studies_list()]
 
 
-def config(name: str, *, full: bool = False, seed: int = 0) -> Dict[str, Any]:
+def config(name: str, *, full: bool = False, seed: Optional[int] = None) -> Dict[str, Any]:
     """The quick (default) or the thesis's full config of study `name`, as a dict to edit and
-    pass to `run`."""
+    pass to `run`. `seed` None: the study's default seed, as on the command line (0 but for
+    the demo)."""
     result: Dict[str, Any] = json.loads(_qrm.studies_config(name, full, seed))
     return result
 
@@ -48,7 +49,7 @@ def run(
     config: Optional[Mapping[str, Any]] = None,
     *,
     quick: bool = False,
-    seed: int = 0,
+    seed: Optional[int] = None,
     progress: Optional[Progress] = None,
 ) -> types.StudyRun:
     """Runs study `name` with `config` (a dict as `config` returns; None: the built-in quick

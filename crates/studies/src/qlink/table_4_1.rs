@@ -150,6 +150,26 @@ impl std::str::FromStr for Trials {
     }
 }
 
+/// The shortest and longest step between checks along a path (m): below a centimetre it only
+/// multiplies the work; above 100 m no check happens on a link.
+pub const MIN_STEP_M: f64 = 0.01;
+/// See [`MIN_STEP_M`].
+pub const MAX_STEP_M: f64 = 100.0;
+/// The largest range factor or landmark size (a factor of the sensor range; metres).
+pub const MAX_FACTOR: f64 = 100.0;
+/// The most fallback circles per link search.
+pub const MAX_FALLBACKS: usize = 100;
+/// The finest sensing schedule: a stop every degree of arc.
+pub const MIN_STOP_DEGREES: f64 = 1.0;
+/// CPU seconds per navigation at a 1 m step, measured: `qrm study run table-4-1 --quick`
+/// (17 settings × 400 pairs = 6,800 navigations, worlds mapped included) took 43.5 s of CPU.
+pub const SECONDS_PER_NAVIGATION: f64 = 6.4e-3;
+/// Pairs a setting with `pairs` left out is estimated at: every start/goal pair of a world,
+/// 39,800 per obstacle size in the full-scale run (issue 36's audit).
+pub const ALL_PAIRS_ESTIMATE: usize = 40_000;
+/// The most CPU time a Table 4.1 config may be estimated at (s): 48 core-hours.
+pub const MAX_CORE_SECONDS: f64 = 48.0 * 3600.0;
+
 /// What the study runs.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -269,22 +289,58 @@ impl StudyConfig {
                 self.samples
             ));
         }
-        if !(self.step.is_finite() && self.step > 0.0) {
-            return bad(format!("step must be finite and > 0, got {}", self.step));
+        // A check per step along every path (issue 39: `step = 1e-12` ran for ever).
+        if !(self.step.is_finite() && (MIN_STEP_M..=MAX_STEP_M).contains(&self.step)) {
+            return bad(format!(
+                "step = {:?} m: must be in {MIN_STEP_M}..={MAX_STEP_M} m",
+                self.step
+            ));
         }
         if let Some(v) = self
             .range_factors
             .iter()
             .chain(&self.sizes)
-            .find(|v| !(v.is_finite() && **v > 0.0))
+            .find(|v| !(v.is_finite() && **v > 0.0 && **v <= MAX_FACTOR))
         {
             return bad(format!(
-                "range factors and sizes must be finite and > 0, got {v}"
+                "range factors and sizes must be finite, > 0 and at most {MAX_FACTOR}, got {v:?}"
             ));
         }
         self.references.check()?;
         for s in std::iter::once(&self.schedule).chain(&self.occlusion_schedules) {
             s.sensing.check()?;
+            if s.fallbacks > MAX_FALLBACKS {
+                return bad(format!(
+                    "fallbacks = {}: at most {MAX_FALLBACKS} fallback circles per link search",
+                    s.fallbacks
+                ));
+            }
+            if let Sensing::AtStops { degrees } = s.sensing
+                && !(MIN_STOP_DEGREES..=360.0).contains(&degrees)
+            {
+                return bad(format!(
+                    "sensing stops every {degrees:?}°: every {MIN_STOP_DEGREES}° to 360°"
+                ));
+            }
+        }
+        // The work: one navigation per pair and setting, its cost in proportion to the checks
+        // along its path (1/step); pairs left out (all) counted as the quick config's.
+        let navigations = |pairs: Option<usize>| pairs.unwrap_or(ALL_PAIRS_ESTIMATE) as f64;
+        let n_settings = (self.range_factors.len() + self.sizes.len()) as f64
+            * navigations(self.pairs)
+            + (self.occlusion_schedules.len() * self.sizes.len()) as f64
+                * navigations(self.schedule_pairs.or(self.pairs));
+        let seconds = n_settings * SECONDS_PER_NAVIGATION / self.step;
+        if seconds > MAX_CORE_SECONDS {
+            return bad(format!(
+                "about {n_settings:.2e} navigations at step = {} m, ≈ {:.0} core-hours ({:.1} ms \
+                 each at 1 m, measured); the limit is {:.0} core-hours: fewer pairs or \
+                 schedule_pairs, fewer sizes or range_factors, or a longer step",
+                self.step,
+                seconds / 3600.0,
+                SECONDS_PER_NAVIGATION * 1e3,
+                MAX_CORE_SECONDS / 3600.0
+            ));
         }
         let main = |trial: Trial, value: f64| Setting {
             trial,

@@ -60,6 +60,21 @@ pub fn dataset(name: DatasetName, config: &StudyConfig) -> Result<Dataset> {
     })
 }
 
+/// The most folds of the cross-validation.
+pub const MAX_FOLDS: usize = 100;
+/// The most grid cells per side.
+pub const MAX_GRID: usize = 2_000;
+/// The most trials per belief.
+pub const MAX_TRIALS_PER_BELIEF: usize = 1_000;
+/// The largest μ (states of a learned calculus).
+pub const MAX_MU: usize = 10_000;
+/// CPU seconds per unit of the work estimate in `check`, measured: `qrm study run serge-cv
+/// --quick` (4.0 × 10⁶ units: 3 datasets × 6 × 8 searches × 5 × (2,000 + 60²)) took 2.7 s of
+/// CPU.
+pub const SECONDS_PER_UNIT: f64 = 6.7e-7;
+/// The most CPU time a config may be estimated at (s): 48 core-hours.
+pub const MAX_CORE_SECONDS: f64 = 48.0 * 3600.0;
+
 fn check(config: &StudyConfig) -> Result<()> {
     if config.datasets.is_empty() {
         return Err(StudyError::InvalidParameter(
@@ -79,6 +94,45 @@ fn check(config: &StudyConfig) -> Result<()> {
         return Err(StudyError::InvalidParameter(
             "folds and grid must be at least 2, trials_per_belief and samples at least 1".into(),
         ));
+    }
+    // Sizes bounded one by one (a grid of 10¹² cells per side is no grid), then their work
+    // together (issue 39: folds, grid, samples and trials_per_belief of 10¹² were accepted).
+    for (field, v, max) in [
+        ("folds", config.folds, MAX_FOLDS),
+        ("grid", config.grid, MAX_GRID),
+        ("samples", config.samples, pqrm::config::MAX_SAMPLES),
+        (
+            "trials_per_belief",
+            config.trials_per_belief,
+            MAX_TRIALS_PER_BELIEF,
+        ),
+        ("mu_for_sigma", config.mu_for_sigma, MAX_MU),
+    ]
+    .into_iter()
+    .chain(config.mus.iter().flatten().map(|&m| ("mus", m, MAX_MU)))
+    {
+        if v > max {
+            return Err(StudyError::InvalidParameter(format!(
+                "{field} = {v}: at most {max}"
+            )));
+        }
+    }
+    let searches = config.mus.as_ref().map_or(5, Vec::len) + config.sigmas.len();
+    let work = config.datasets.len() as f64
+        * (config.folds + 1) as f64
+        * searches as f64
+        * config.trials_per_belief as f64
+        * (config.samples as f64 + (config.grid as f64).powi(2));
+    let seconds = work * SECONDS_PER_UNIT;
+    if seconds > MAX_CORE_SECONDS {
+        return Err(StudyError::InvalidParameter(format!(
+            "about {:.0} core-hours (datasets × (folds + 1) × searches × trials_per_belief × \
+             (samples + grid²) = {work:.2e} at {:.2} µs each, measured); the limit is {:.0}: \
+             fewer folds, trials, samples or a coarser grid",
+            seconds / 3600.0,
+            SECONDS_PER_UNIT * 1e6,
+            MAX_CORE_SECONDS / 3600.0
+        )));
     }
     let sigma_ok = |s: &f64| s.is_finite() && *s >= 0.0;
     if !sigma_ok(&config.sigma_for_mu) {

@@ -253,14 +253,11 @@ impl Study for RealData {
         for name in &c.calculi {
             Calculus::resolve(name)?;
         }
-        for (field, v) in [
-            ("sigma_range", c.sigma_range),
-            ("sigma_bearing", c.sigma_bearing),
-        ] {
-            if !(v.is_finite() && v >= 0.0) {
-                return bad(format!("{field} = {v}: a noise must be finite and >= 0"));
-            }
+        RangeBearingNoise {
+            sigma_range: c.sigma_range,
+            sigma_bearing: c.sigma_bearing,
         }
+        .validate()?;
         if let Some(z) = c.gate_sigmas
             && !(z.is_finite() && z > 0.0)
         {

@@ -124,6 +124,11 @@ fn one_world() -> usize {
 /// no end).
 pub const MAX_FIELD_TRIALS: u64 = 200_000;
 
+/// The longest search-POMDP horizon (4 in §4.4.2).
+pub const MAX_HORIZON: usize = 8;
+/// The most contingency re-plans per trial.
+pub const MAX_REPLANS: usize = 100;
+
 /// The shortest distance between perception checks along a path (m).
 pub const MIN_STEP_M: f64 = 0.01;
 /// The longest (m): the field site is 100 m across.
@@ -172,6 +177,21 @@ impl FieldParams {
             return Err(StudyError::InvalidParameter(
                 "trials, samples, horizon and worlds must be at least 1".into(),
             ));
+        }
+        pqrm::config::check_samples(self.samples)?;
+        // The search POMDP's work grows exponentially with its horizon; a link needs at most
+        // three shared landmarks (an element has three); re-plans and votes bounded alike
+        // (issue 39: each was accepted at 10¹²).
+        for (field, v, max) in [
+            ("horizon", self.horizon, MAX_HORIZON),
+            ("beta", self.beta, 3),
+            ("max_replans", self.max_replans, MAX_REPLANS),
+        ] {
+            if v > max {
+                return Err(StudyError::InvalidParameter(format!(
+                    "{field} = {v}: at most {max}"
+                )));
+            }
         }
         let total = (self.worlds as u64).saturating_mul(self.trials as u64);
         if total > MAX_FIELD_TRIALS {
