@@ -67,8 +67,11 @@ fn foxglove_schema(name: &str) -> String {
             name,
             json!({"timestamp": time_props(), "frame_id": {"type": "string"}, "pose": pose(),
                    "start_angle": {"type": "number"}, "end_angle": {"type": "number"},
-                   "ranges": {"type": "array", "items": {"type": "number"}},
-                   "intensities": {"type": "array", "items": {"type": "number"}}}),
+                   // null: a beam without return (JSON has no infinity); the schema says so
+                   // (issue 40: it declared numbers, and every /scan message broke it)
+                   "ranges": {"type": "array", "items": {"type": ["number", "null"]},
+                              "description": "m; null: no return"},
+                   "intensities": {"type": "array", "items": {"type": ["number", "null"]}}}),
         ),
         "foxglove.FrameTransform" => schema(
             name,
