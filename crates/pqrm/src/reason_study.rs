@@ -859,7 +859,8 @@ pub fn claims(r: &ReasonCalculusResult, fusion: Fusion) -> Vec<Claim> {
     let c = &r.check;
     out.push(Claim {
         what: format!(
-            "{}: the check's flags are wrong more often than a random entry",
+            "{}: an entry the check flags is a wrong map entry more often than a random \
+             entry is (precision above the base rate)",
             r.calculus
         ),
         ours: match c.precision {
