@@ -201,6 +201,14 @@ pub struct MapArgs {
     /// MCAP lidar scans: position noise σ (m) of each extracted landmark.
     #[arg(long, default_value_t = 0.1)]
     pub lidar_sigma: f64,
+    /// MCAP lidar scans: fewest returns of a landmark at a 0.25° scanner (scaled to the scan's
+    /// resolution: 5 at 0.5°, 3 at 1°; never below 3).
+    #[arg(long, default_value_t = sim2d_defaults::MIN_POINTS)]
+    pub min_points: usize,
+    /// MCAP lidar scans: the largest landmark radius (m) a cluster of returns may be (poles,
+    /// trunks; larger round objects are not landmarks).
+    #[arg(long, default_value_t = sim2d_defaults::MAX_RADIUS)]
+    pub landmark_radius: f64,
     /// MCAP: read a truncated or damaged file up to its last readable chunk (with a warning)
     /// instead of failing.
     #[arg(long)]
@@ -426,5 +434,22 @@ impl Operation {
             Self::HomingInverse => Some(P::HomingInverse),
             Self::Converse => None,
         }
+    }
+}
+
+/// The lidar extractor's defaults, as flag defaults.
+mod sim2d_defaults {
+    pub const MIN_POINTS: usize = 10;
+    pub const MAX_RADIUS: f64 = 1.0;
+}
+
+#[cfg(test)]
+mod tests {
+    /// The flags' defaults are the extractor's.
+    #[test]
+    fn lidar_flag_defaults_are_the_extractors() {
+        let d = sim2d::ExtractorConfig::default();
+        assert_eq!(super::sim2d_defaults::MIN_POINTS, d.min_points);
+        assert!((super::sim2d_defaults::MAX_RADIUS - d.max_radius).abs() < 1e-12);
     }
 }

@@ -122,6 +122,18 @@ fn map_job(a: &MapArgs) -> Result<MapJob> {
         ..Default::default()
     };
     log.lidar.sigma = a.lidar_sigma;
+    if a.min_points == 0 || a.min_points > 10_000 {
+        anyhow::bail!("--min-points {}: must be in 1..=10000", a.min_points);
+    }
+    if !(a.landmark_radius.is_finite() && a.landmark_radius > 0.0 && a.landmark_radius <= 100.0) {
+        anyhow::bail!(
+            "--landmark-radius {:?}: must be a positive number of metres, at most 100",
+            a.landmark_radius
+        );
+    }
+    log.lidar.extractor.min_points = a.min_points;
+    log.lidar.extractor.max_points = log.lidar.extractor.max_points.max(a.min_points);
+    log.lidar.extractor.max_radius = a.landmark_radius;
     Ok(MapJob {
         format: a.format.into(),
         input: a.input.clone(),

@@ -730,15 +730,19 @@ fn recognise(
             .then(a.2.cmp(&b.2))
             .then(a.3.cmp(&b.3))
     });
-    let mut recognizer = sim2d::TriangleRecognizer::new(options.lidar.recognition_tolerance);
+    // Mapping needs triplets: a scan of fewer than three candidates is not recognised (it
+    // would only make new ids for known landmarks, issue 40).
+    let tolerance = options.lidar.recognition_tolerance;
+    let mut detector = sim2d::LidarDetector {
+        extractor: options.lidar.extractor,
+        recognizer: sim2d::TriangleRecognizer::new(tolerance).tracking(),
+        ..sim2d::LidarDetector::new(tolerance, options.lidar.sigma)
+    }
+    .with_min_candidates(sim2d::MAPPING_MIN_CANDIDATES);
     let mut scans = Vec::with_capacity(range_scans.len());
     for (s, robot, order, i) in range_scans {
         let topic = || channels[&chosen[order]].info.topic.clone();
-        let points: Vec<[f64; 2]> = sim2d::extract(&s.to_laser_scan(), &options.lidar.extractor)
-            .into_iter()
-            .filter(|c| c.kind == sim2d::CandidateKind::Point)
-            .map(|c| c.centre)
-            .collect();
+        let points = sim2d::points_of(&s.to_laser_scan(), &options.lidar.extractor);
         if points.len() > MAX_CANDIDATES {
             return Err(LogError::Message {
                 path: path.to_path_buf(),
@@ -751,11 +755,10 @@ fn recognise(
                 ),
             });
         }
-        let ids = recognizer.recognise(&points);
-        let obs = points
-            .iter()
-            .zip(ids)
-            .map(|(p, id)| Observation::isotropic(LandmarkId(id), *p, options.lidar.sigma))
+        let obs = detector
+            .recognise(points)
+            .into_iter()
+            .map(|(d, _)| Observation::isotropic(LandmarkId(d.id), d.xy, options.lidar.sigma))
             .collect::<pqrm::Result<Vec<_>>>()
             .and_then(|obs| Scan::new(s.t, robot, obs))
             .map_err(|source| LogError::Observation {

@@ -5,7 +5,8 @@
 //!    `max(jump_abs, jump_rel · r)` or a ray returns nothing; neighbouring clusters whose end
 //!    points are closer than `merge_distance` join again (one dropped ray must not cut a trunk
 //!    in two).
-//! 2. **Classification.** A cluster of `min_points..=max_points` returns, or one with a corner
+//! 2. **Classification.** A cluster of `min_points..=max_points` returns (stated for a 0.25°
+//!    scanner and scaled to the scan's resolution, at least three), or one with a corner
 //!    (a point farther than `corner_distance` from the chord), is a point-landmark candidate
 //!    if its returns bulge like an arc (farthest point ≥ 10 % of the chord from it) and fit in
 //!    a landmark's diameter (`2·max_radius`);
@@ -46,6 +47,27 @@ pub struct ExtractorConfig {
     pub wall_residual: f64,
     /// Largest plausible landmark radius for the circle fit (m).
     pub max_radius: f64,
+    /// The angular resolution (rad) `min_points` and `max_points` are stated for. A scan of
+    /// another resolution scales both by `points_resolution / its resolution` (the minimum
+    /// never below [`MIN_POINTS_FLOOR`]): a pole covers a quarter of the returns on a 1°
+    /// scanner that it does on a 0.25° one, and the fixed 10-return rule gave a 360-beam
+    /// lidar an empty map (issue 40). Zero: the counts as given, whatever the scan.
+    #[serde(default = "quarter_degree")]
+    pub points_resolution: f64,
+}
+
+/// The fewest returns a point-landmark candidate has at any resolution: three points fix a
+/// circle.
+pub const MIN_POINTS_FLOOR: usize = 3;
+
+/// Frames a tracked landmark out of view is still looked for where it was last seen.
+const MAX_TRACK_AGE: u32 = 4;
+
+/// The fewest returns a landmark's centre is fitted from as a circle.
+const MIN_FIT_POINTS: usize = 5;
+
+fn quarter_degree() -> f64 {
+    0.25f64.to_radians()
 }
 
 impl Default for ExtractorConfig {
@@ -61,8 +83,40 @@ impl Default for ExtractorConfig {
             wall_length: 4.0,
             wall_residual: 0.1,
             max_radius: 1.0,
+            points_resolution: quarter_degree(),
         }
     }
+}
+
+impl ExtractorConfig {
+    /// `min_points..=max_points` for a scan of angular resolution `resolution` (rad): scaled
+    /// from [`ExtractorConfig::points_resolution`], the minimum at least [`MIN_POINTS_FLOOR`].
+    #[must_use]
+    pub fn points_for(&self, resolution: f64) -> (usize, usize) {
+        let scale = self.points_resolution / resolution;
+        if !(scale.is_finite() && scale > 0.0) || self.points_resolution <= 0.0 {
+            return (self.min_points, self.max_points);
+        }
+        let min = ((self.min_points as f64 * scale).round() as usize).max(MIN_POINTS_FLOOR);
+        let max = ((self.max_points as f64 * scale).round() as usize).max(min);
+        (min, max)
+    }
+}
+
+/// A scan's angular resolution (rad): the median spacing of its rays (robust to a gap).
+#[must_use]
+pub fn angular_resolution(scan: &LaserScan) -> f64 {
+    let mut steps: Vec<f64> = scan
+        .angles
+        .windows(2)
+        .map(|w| (w[1] - w[0]).abs())
+        .filter(|d| d.is_finite() && *d > 0.0)
+        .collect();
+    if steps.is_empty() {
+        return f64::NAN;
+    }
+    let mid = steps.len() / 2;
+    *steps.select_nth_unstable_by(mid, f64::total_cmp).1
 }
 
 /// What a cluster was classified as.
@@ -137,9 +191,11 @@ fn circle_fit(pts: &[[f64; 2]]) -> Option<([f64; 2], f64)> {
 /// Extracts landmark candidates from one scan.
 #[must_use]
 pub fn extract(scan: &LaserScan, cfg: &ExtractorConfig) -> Vec<Candidate> {
+    let resolution = angular_resolution(scan);
+    let points = cfg.points_for(resolution);
     clusters(scan, cfg)
         .into_iter()
-        .filter_map(|c| candidate(scan, cfg, &c))
+        .filter_map(|c| candidate(scan, cfg, points, resolution, &c))
         .collect()
 }
 
@@ -194,7 +250,13 @@ fn clusters(scan: &LaserScan, cfg: &ExtractorConfig) -> Vec<Vec<usize>> {
 
 /// One cluster as a candidate: a wall (long and straight), a point landmark (an arc of the
 /// right size, or a corner), or nothing.
-fn candidate(scan: &LaserScan, cfg: &ExtractorConfig, c: &[usize]) -> Option<Candidate> {
+fn candidate(
+    scan: &LaserScan,
+    cfg: &ExtractorConfig,
+    (min_points, max_points): (usize, usize),
+    resolution: f64,
+    c: &[usize],
+) -> Option<Candidate> {
     let pts: Vec<[f64; 2]> = c.iter().map(|&i| return_xy(scan, i)).collect();
     let (a, b) = (pts[0], pts[pts.len() - 1]);
     let chord = dist(a, b);
@@ -222,7 +284,19 @@ fn candidate(scan: &LaserScan, cfg: &ExtractorConfig, c: &[usize]) -> Option<Can
         });
     }
     let corner = max_off > cfg.corner_distance && chord < cfg.wall_length;
-    if !((cfg.min_points..=cfg.max_points).contains(&pts.len()) || corner) {
+    // Up close a landmark of `max_radius` covers more returns than `max_points` (a 0.25 m
+    // pole at 2 m: 57 at 0.25°), and it dropped out of the frames nearest to it; the most a
+    // plausible landmark can cover at this cluster's range is allowed too (its size is
+    // checked by the chord below).
+    let range = pts.iter().map(|p| p[0].hypot(p[1])).sum::<f64>() / pts.len() as f64;
+    let subtended = 2.0 * (cfg.max_radius / range).min(1.0).asin();
+    let up_close = if resolution.is_finite() && resolution > 0.0 {
+        (subtended / resolution).ceil() as usize + 2
+    } else {
+        0
+    };
+    let max_points = max_points.max(up_close);
+    if !((min_points..=max_points).contains(&pts.len()) || corner) {
         return None;
     }
     // A trunk's returns bulge (an arc) and fit within its diameter; a straight piece of wall
@@ -241,7 +315,16 @@ fn candidate(scan: &LaserScan, cfg: &ExtractorConfig, c: &[usize]) -> Option<Can
         centroid[0] * (1.0 + 0.5 * chord / cr),
         centroid[1] * (1.0 + 0.5 * chord / cr),
     ];
-    let centre = match circle_fit(&pts) {
+    // A circle through three or four noisy returns of a small arc is anything up to
+    // `max_radius` (the sagitta is below the range noise): fitted from five returns on, which
+    // a 0.25° scanner always has (its minimum is ten); a coarser one's few-return clusters
+    // take the centroid pushed back.
+    let fit = if pts.len() >= MIN_FIT_POINTS {
+        circle_fit(&pts)
+    } else {
+        None
+    };
+    let centre = match fit {
         // The centre must lie behind the returns (farther than their centroid).
         Some((c, r)) if r <= cfg.max_radius && c[0].hypot(c[1]) > cr => c,
         _ => fallback,
@@ -264,6 +347,9 @@ pub struct TriangleRecognizer {
     next_id: u32,
     tolerance: f64,
     min_votes: u32,
+    /// Where each landmark was last seen (robot frame), its id and how many frames ago,
+    /// when frames are tracked.
+    previous: Option<Vec<([f64; 2], u32, u32)>>,
 }
 
 impl TriangleRecognizer {
@@ -275,7 +361,22 @@ impl TriangleRecognizer {
             next_id: 0,
             tolerance,
             min_votes: 1,
+            previous: None,
         }
+    }
+
+    /// The same recogniser also tracking candidates from one frame to the next: a candidate
+    /// takes the id of the landmark last seen within the tolerance of it (in the robot frame;
+    /// a quarter more per frame for one last seen up to four frames ago) when exactly one is,
+    /// before triangles are asked. Frames of a moving scanner are
+    /// close (centimetres, a degree apart); a frame of three candidates of which one is new
+    /// has no triangle of known sides at all (its two known landmarks got new ids), and three
+    /// far poles matched a congruent triangle of three others by chance (issue 40). Only for
+    /// consecutive frames of one robot.
+    #[must_use]
+    pub fn tracking(mut self) -> Self {
+        self.previous = Some(Vec::new());
+        self
     }
 
     /// The same recogniser accepting a known id only with at least `votes` matching
@@ -299,8 +400,53 @@ impl TriangleRecognizer {
         let d = |i: usize, j: usize| {
             (positions[i][0] - positions[j][0]).hypot(positions[i][1] - positions[j][1])
         };
-        let out: Vec<u32> = self
-            .identify(positions)
+        let mut found = self.identify(positions);
+        if let Some(previous) = &self.previous {
+            // Tracking first: consecutive frames are close, and a triangle of three
+            // candidates can match a congruent triangle of other landmarks by chance (the
+            // 0.3 m tolerance over a few dozen triangles); the track wins where both answer.
+            let near = |i: usize| -> Option<u32> {
+                // The robot moves on while a landmark is out of view: a frame later the
+                // tolerance, each frame more a quarter of it more (not the whole: a landmark
+                // a metre from one that left the view must not take its id).
+                let mut ids = previous.iter().filter(|(p, _, age)| {
+                    (p[0] - positions[i][0]).hypot(p[1] - positions[i][1])
+                        <= self.tolerance * (1.0 + 0.25 * f64::from(age - 1))
+                });
+                match (ids.next(), ids.next()) {
+                    (Some((_, id, _)), None) => Some(*id),
+                    _ => None,
+                }
+            };
+            let tracked: Vec<Option<u32>> = (0..n).map(near).collect();
+            let count = |id: u32| tracked.iter().filter(|t| **t == Some(id)).count();
+            let tracked: Vec<Option<u32>> = tracked
+                .iter()
+                .map(|t| t.filter(|id| count(*id) == 1))
+                .collect();
+            let taken: std::collections::BTreeSet<u32> =
+                tracked.iter().flatten().copied().collect();
+            // A triangle's answer must also agree with the tracked landmarks of the frame: two
+            // landmarks a metre apart, seen again from afar, have triangles alike (issue 40).
+            let anchors: Vec<(usize, u32)> = tracked
+                .iter()
+                .enumerate()
+                .filter_map(|(j, t)| t.map(|id| (j, id)))
+                .collect();
+            for (i, (slot, t)) in found.iter_mut().zip(&tracked).enumerate() {
+                *slot = match (*t, *slot) {
+                    (Some(id), _) => Some(id),
+                    (None, Some(id))
+                        if !taken.contains(&id) && self.agrees(positions, i, id, &anchors) =>
+                    {
+                        Some(id)
+                    }
+                    _ => None,
+                };
+            }
+            self.anchor(positions, &mut found);
+        }
+        let out: Vec<u32> = found
             .into_iter()
             .map(|a| {
                 a.unwrap_or_else(|| {
@@ -309,6 +455,14 @@ impl TriangleRecognizer {
                 })
             })
             .collect();
+        if let Some(previous) = &mut self.previous {
+            let seen: std::collections::BTreeSet<u32> = out.iter().copied().collect();
+            previous.retain(|(_, id, age)| !seen.contains(id) && *age < MAX_TRACK_AGE);
+            for entry in previous.iter_mut() {
+                entry.2 += 1;
+            }
+            previous.extend(positions.iter().zip(&out).map(|(p, id)| (*p, *id, 1)));
+        }
         for i in 0..n {
             for j in i + 1..n {
                 let key = if out[i] < out[j] {
@@ -322,6 +476,69 @@ impl TriangleRecognizer {
             }
         }
         out
+    }
+
+    /// Whether candidate `i` as landmark `id` keeps the known distances to the `anchors`
+    /// (candidates identified otherwise) within twice the tolerance; true with fewer than two
+    /// anchors of known distance.
+    fn agrees(&self, positions: &[[f64; 2]], i: usize, id: u32, anchors: &[(usize, u32)]) -> bool {
+        let errs: Vec<f64> = anchors
+            .iter()
+            .filter(|(j, a)| *j != i && *a != id)
+            .filter_map(|&(j, a)| {
+                let d =
+                    (positions[i][0] - positions[j][0]).hypot(positions[i][1] - positions[j][1]);
+                self.known(a, id).map(|e| (e - d).abs())
+            })
+            .collect();
+        errs.len() < 2 || errs.iter().all(|e| *e <= 2.0 * self.tolerance)
+    }
+
+    /// Candidates left unidentified matched against the ones identified (tracked frames only):
+    /// a far landmark seen again after a gap, its centre from three returns too noisy for
+    /// every side of a triangle to agree, is still the one known landmark whose distances to
+    /// two or more identified landmarks of the frame all agree within twice the tolerance —
+    /// when no other known landmark comes within it.
+    fn anchor(&self, positions: &[[f64; 2]], found: &mut [Option<u32>]) {
+        let d = |i: usize, j: usize| {
+            (positions[i][0] - positions[j][0]).hypot(positions[i][1] - positions[j][1])
+        };
+        let slack = 2.0 * self.tolerance;
+        let known_ids: std::collections::BTreeSet<u32> =
+            self.distances.keys().flat_map(|&(a, b)| [a, b]).collect();
+        for k in 0..positions.len() {
+            if found[k].is_some() {
+                continue;
+            }
+            let anchors: Vec<(usize, u32)> = found
+                .iter()
+                .enumerate()
+                .filter_map(|(j, id)| id.map(|id| (j, id)))
+                .collect();
+            if anchors.len() < 2 {
+                return;
+            }
+            let used: std::collections::BTreeSet<u32> = anchors.iter().map(|a| a.1).collect();
+            let mut fits: Vec<(f64, u32)> = known_ids
+                .iter()
+                .filter(|c| !used.contains(c))
+                .filter_map(|&c| {
+                    let errs: Vec<f64> = anchors
+                        .iter()
+                        .filter_map(|&(j, a)| self.known(a, c).map(|e| (e - d(k, j)).abs()))
+                        .collect();
+                    (errs.len() >= anchors.len().min(3))
+                        .then(|| (errs.iter().copied().fold(0.0, f64::max), c))
+                })
+                .collect();
+            fits.sort_by(|x, y| x.0.total_cmp(&y.0));
+            if let Some(&(best, c)) = fits.first()
+                && best <= slack
+                && fits.get(1).is_none_or(|second| second.0 > slack)
+            {
+                found[k] = Some(c);
+            }
+        }
     }
 
     /// Identifies candidates against the catalogue without changing it: the known landmark
@@ -417,7 +634,17 @@ pub struct LidarDetector {
     pub recognizer: TriangleRecognizer,
     /// Position noise reported with each detection (m).
     pub sigma: f64,
+    /// Fewest candidates a frame needs to be recognised (default 1). Triangles need three:
+    /// a frame of one or two candidates matches nothing, and recognising it makes new ids for
+    /// landmarks already known — at a 1° scanner, where far poles drop in and out, dozens per
+    /// pole (issue 40). A map needs triplets, so mapping from scans uses 3
+    /// ([`MAPPING_MIN_CANDIDATES`]); a navigating robot still wants to see one or two.
+    pub min_candidates: usize,
 }
+
+/// [`LidarDetector::min_candidates`] for mapping: a frame with fewer candidates holds no
+/// triplet and cannot be recognised by triangles.
+pub const MAPPING_MIN_CANDIDATES: usize = 3;
 
 impl LidarDetector {
     /// Replaces every frame's detections by the ones extracted from its scan (frames without
@@ -451,15 +678,25 @@ impl LidarDetector {
             extractor: ExtractorConfig::default(),
             recognizer: TriangleRecognizer::new(tolerance),
             sigma,
+            min_candidates: 1,
         }
     }
 
     /// Detections of one scan (ids from the recogniser) with what each cluster truly was.
     pub fn detect(&mut self, scan: &LaserScan) -> Vec<(crate::sensors::Detection, Option<Hit>)> {
-        let points: Vec<Candidate> = extract(scan, &self.extractor)
-            .into_iter()
-            .filter(|c| c.kind == CandidateKind::Point)
-            .collect();
+        self.recognise(points_of(scan, &self.extractor))
+    }
+
+    /// Detections of point candidates already extracted from one scan ([`points_of`]). A
+    /// frame of fewer than [`LidarDetector::min_candidates`] gives none: nothing is learned
+    /// from it and no id is made for it.
+    pub fn recognise(
+        &mut self,
+        points: Vec<Candidate>,
+    ) -> Vec<(crate::sensors::Detection, Option<Hit>)> {
+        if points.len() < self.min_candidates {
+            return Vec::new();
+        }
         let ids = self
             .recognizer
             .recognise(&points.iter().map(|c| c.centre).collect::<Vec<_>>());
@@ -479,4 +716,21 @@ impl LidarDetector {
             })
             .collect()
     }
+
+    /// The same detector giving no detections for a frame of fewer than `n` candidates (see
+    /// [`LidarDetector::min_candidates`]).
+    #[must_use]
+    pub fn with_min_candidates(mut self, n: usize) -> Self {
+        self.min_candidates = n;
+        self
+    }
+}
+
+/// The point-landmark candidates of one scan.
+#[must_use]
+pub fn points_of(scan: &LaserScan, cfg: &ExtractorConfig) -> Vec<Candidate> {
+    extract(scan, cfg)
+        .into_iter()
+        .filter(|c| c.kind == CandidateKind::Point)
+        .collect()
 }

@@ -30,7 +30,8 @@ mod world;
 
 pub use error::{Result, SimError};
 pub use extractor::{
-    Candidate, CandidateKind, ExtractorConfig, LidarDetector, TriangleRecognizer, extract,
+    Candidate, CandidateKind, ExtractorConfig, LidarDetector, MAPPING_MIN_CANDIDATES,
+    MIN_POINTS_FLOOR, TriangleRecognizer, angular_resolution, extract, points_of,
 };
 pub use scenario::{Frame, SCENARIOS, Scenario, scenario, write_observations_csv};
 pub use sensors::{

@@ -77,6 +77,37 @@ impl MapFormatChoice {
     }
 }
 
+/// Says what a user should know before mapping: no scan with three landmarks (the map will be
+/// empty), or far more landmark ids than any scan sees (a recogniser splitting landmarks), with
+/// the likely cause (issue 40: a 360-beam lidar gave an empty map with exit 0 and no word).
+fn warn_if_unmappable(scans: &[pqrm::Scan], warn: &dyn Fn(String)) {
+    let most = scans
+        .iter()
+        .map(|s| s.observations.len())
+        .max()
+        .unwrap_or(0);
+    let ids: BTreeSet<u32> = scans
+        .iter()
+        .flat_map(|s| s.observations.iter().map(|o| o.id.0))
+        .collect();
+    if most < 3 {
+        warn(format!(
+            "{} scans with landmarks, none with three (at most {most}): the map will have no \
+             sets. From a lidar: its landmarks may be too thin or too far for its resolution \
+             (a pole needs three returns; --min-points, --landmark-radius), or --range-max \
+             cuts them off",
+            scans.iter().filter(|s| !s.observations.is_empty()).count()
+        ));
+    } else if ids.len() > 50 && ids.len() > 10 * most {
+        warn(format!(
+            "{} landmark ids, but no scan sees more than {most}: landmarks are probably being \
+             split into many ids (from a lidar: recognition losing them between scans; a \
+             landmark too thin for the scanner, or clutter taken for landmarks)",
+            ids.len()
+        ));
+    }
+}
+
 /// An upper bound on the ordered sets a map of `scans` can hold: the smaller of
 /// `n(n−1)(n−2)` over the `n` distinct landmarks and the sum of `m(m−1)(m−2)` over the
 /// scans (`m` landmarks each). Saturates instead of overflowing.
@@ -235,6 +266,7 @@ impl MapJob {
             log_reading(&mut reading, r);
         }
         let possible_sets = possible_ordered_sets(&data.scans);
+        warn_if_unmappable(&data.scans, warn);
         Ok(MapInput {
             orderings: self.orderings.resolve(possible_sets),
             possible_sets,
