@@ -65,12 +65,14 @@ fn map_failing_at_scoring_leaves_no_output() {
 /// Starts a long study writing to `d/study`; returns it once its staging directory exists.
 fn start_long_study(d: &std::path::Path) -> (std::process::Child, std::path::PathBuf) {
     let out = d.join("study");
-    let child = Command::new(env!("CARGO_BIN_EXE_qrm"))
+    // Hours of work by its estimate (20 times the full study), well inside the estimate's
+    // limit: it runs until stopped.
+    let mut child = Command::new(env!("CARGO_BIN_EXE_qrm"))
         .args([
             "pqrm",
             "study",
             "--trials",
-            "100000",
+            "20000",
             "--out",
             out.to_str().unwrap(),
         ])
@@ -81,6 +83,13 @@ fn start_long_study(d: &std::path::Path) -> (std::process::Child, std::path::Pat
     let staging = d.join(format!(".study.partial-{}", child.id()));
     let t0 = Instant::now();
     while !staging.exists() {
+        if child.try_wait().unwrap().is_some() {
+            let o = child.wait_with_output().unwrap();
+            panic!(
+                "the study ended before it started: {}",
+                String::from_utf8_lossy(&o.stderr)
+            );
+        }
         assert!(
             t0.elapsed() < Duration::from_secs(60),
             "the study never started"
