@@ -112,8 +112,12 @@ fn lidar_only_mapping_is_a_pipeline_too() {
     let s: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(map.join("summary.json")).unwrap()).unwrap();
     assert!(s["n_scored"].as_u64().unwrap() > 100, "{s}");
+    // Mostly right: well below left-right's chance (0.5). Measured on this seed: 0.243, and
+    // 0.252 once landmarks up close were no longer dropped for having more than 50 returns
+    // (issue 40; seven more detections of real trees); seed 3 gives 0.308. The lidar-only
+    // pipeline's errors are issue 36's (about half the ids are false landmarks).
     assert!(
-        s["error_rate"].as_f64().unwrap() < 0.25,
+        s["error_rate"].as_f64().unwrap() < 0.3,
         "lidar-only maps mostly right: {s}"
     );
 }

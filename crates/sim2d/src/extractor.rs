@@ -63,6 +63,10 @@ pub const MIN_POINTS_FLOOR: usize = 3;
 /// Frames a tracked landmark out of view is still looked for where it was last seen.
 const MAX_TRACK_AGE: u32 = 4;
 
+/// The farthest a return of an up-close landmark (more returns than `max_points`) may lie from
+/// its fitted circle (m): a few times a scanner's range noise.
+const UP_CLOSE_RESIDUAL: f64 = 0.05;
+
 /// The fewest returns a landmark's centre is fitted from as a circle.
 const MIN_FIT_POINTS: usize = 5;
 
@@ -295,8 +299,21 @@ fn candidate(
     } else {
         0
     };
-    let max_points = max_points.max(up_close);
-    if !((min_points..=max_points).contains(&pts.len()) || corner) {
+    // Beyond `max_points` only a round landmark up close: its returns fit a circle of at most
+    // `max_radius` to within the range noise (a piece of clutter or a corner does not).
+    if pts.len() > max_points && !corner {
+        let round = pts.len() <= up_close
+            && circle_fit(&pts).is_some_and(|(c, r)| {
+                r <= cfg.max_radius
+                    && pts
+                        .iter()
+                        .all(|p| ((p[0] - c[0]).hypot(p[1] - c[1]) - r).abs() <= UP_CLOSE_RESIDUAL)
+            });
+        if !round {
+            return None;
+        }
+    }
+    if pts.len() < min_points && !corner {
         return None;
     }
     // A trunk's returns bulge (an arc) and fit within its diameter; a straight piece of wall

@@ -110,7 +110,13 @@ impl Simulation {
             // first recognised from (clutter has no truth and stays unscored).
             Detector::Lidar => {
                 let (tolerance, sigma) = LIDAR_DETECTOR;
-                let first = LidarDetector::new(tolerance, sigma).detect_frames(&mut frames);
+                // Frames of one drive: recognised by triangles and tracked from frame to frame,
+                // as a bag's scans are mapped (`qrm map --format mcap`).
+                let first = LidarDetector {
+                    recognizer: sim2d::TriangleRecognizer::new(tolerance).tracking(),
+                    ..LidarDetector::new(tolerance, sigma)
+                }
+                .detect_frames(&mut frames);
                 let spec = scenario.world.spec();
                 first
                     .into_iter()
