@@ -8,14 +8,7 @@ mod common;
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
-use common::qrm;
-
-fn scratch(name: &str) -> std::path::PathBuf {
-    let d = std::env::temp_dir().join(format!("qrm-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
+use common::{qrm, scratch};
 
 /// Regression: `qrm map --truth` wrote `map.json`, then failed scoring (coincident surveyed
 /// landmarks) and exited 1 with the map on disk.

@@ -5,7 +5,7 @@
 
 mod common;
 
-use common::qrm;
+use common::{qrm, scratch};
 
 /// Runs `args`, expects a refusal (exit 1), and returns the error text.
 fn refusal(args: &[&str]) -> String {
@@ -15,16 +15,9 @@ fn refusal(args: &[&str]) -> String {
     err
 }
 
-fn scratch(name: &str) -> std::path::PathBuf {
-    let d = std::env::temp_dir().join(format!("qrm-messages-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
-
 #[test]
 fn huge_noise_flags_are_blamed_not_the_recording() {
-    let d = scratch("noise");
+    let d = scratch("messages-noise");
     // A MRCLAM folder the flag check must come before: its files are never read.
     let out = d.join("out");
     for (flag, value, field) in [
@@ -67,7 +60,7 @@ fn out_of_range_binary_names_say_the_range() {
 
 #[test]
 fn study_settings_are_refused_by_field_never_read_as_unset() {
-    let d = scratch("study");
+    let d = scratch("messages-study");
     let out = d.join("out");
     let o = out.to_str().unwrap();
     for (study, set, said) in [
@@ -113,7 +106,7 @@ fn study_settings_are_refused_by_field_never_read_as_unset() {
 
 #[test]
 fn a_huge_sample_count_is_refused_with_its_estimate_not_a_capacity_overflow() {
-    let d = scratch("serge");
+    let d = scratch("messages-serge");
     let input = d.join("obs.csv");
     std::fs::write(&input, "t,robot,landmark,x,y,cxx,cxy,cyy\n").unwrap();
     let err = refusal(&[

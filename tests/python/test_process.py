@@ -93,35 +93,30 @@ FORK_AFTER_LOAD = textwrap.dedent(
 )
 
 
-@pytest.mark.skipif(sys.platform != "linux", reason="fork is the default start method on Linux only")
-def test_fork_pool_after_loading_maps_does_not_hang(tmp_path):
-    script = tmp_path / "fork_after_load.py"
-    script.write_text(FORK_AFTER_LOAD)
+def _run_fork_script(tmp_path, name, text, what, *args):
+    """Runs a fork script in its own interpreter (a hang is caught by the timeout, not by the
+    test runner hanging); it must print `fork-ok`."""
+    script = tmp_path / name
+    script.write_text(text)
     env = dict(os.environ, RAYON_NUM_THREADS="2")
     try:
         done = subprocess.run(
-            [sys.executable, str(script), str(tmp_path)],
-            capture_output=True, text=True, timeout=120, env=env,
+            [sys.executable, str(script), *args], capture_output=True, text=True, timeout=120, env=env
         )
     except subprocess.TimeoutExpired:
-        pytest.fail("a fork-based pool started after loading a map hung (> 120 s)")
+        pytest.fail(f"a fork-based pool started after {what} hung (> 120 s)")
     assert done.returncode == 0, done.stderr
     assert done.stdout.startswith("fork-ok"), done.stdout
+
+
+@pytest.mark.skipif(sys.platform != "linux", reason="fork is the default start method on Linux only")
+def test_fork_pool_after_loading_maps_does_not_hang(tmp_path):
+    _run_fork_script(tmp_path, "fork_after_load.py", FORK_AFTER_LOAD, "loading a map", str(tmp_path))
 
 
 @pytest.mark.skipif(sys.platform != "linux", reason="fork is the default start method on Linux only")
 def test_fork_pool_after_a_qrm_call_does_not_hang(tmp_path):
-    script = tmp_path / "fork_after_call.py"
-    script.write_text(FORK_AFTER_CALL)
-    env = dict(os.environ, RAYON_NUM_THREADS="2")
-    try:
-        done = subprocess.run(
-            [sys.executable, str(script)], capture_output=True, text=True, timeout=120, env=env
-        )
-    except subprocess.TimeoutExpired:
-        pytest.fail("a fork-based pool started after a qrm call hung (> 120 s)")
-    assert done.returncode == 0, done.stderr
-    assert done.stdout.startswith("fork-ok"), done.stdout
+    _run_fork_script(tmp_path, "fork_after_call.py", FORK_AFTER_CALL, "a qrm call")
 
 
 def test_worker_threads_follow_rayon_num_threads(tmp_path):

@@ -24,6 +24,14 @@ pub fn qrm(args: &[&str], stdin: &str) -> Output {
     child.wait_with_output().unwrap()
 }
 
+/// A fresh empty directory under the temp dir, named for the test and this process.
+pub fn scratch(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("qrm-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
 /// Runs `qrm` and returns its stdout, failing the test (with stderr) when it fails.
 pub fn ok(args: &[&str], stdin: &str) -> String {
     let out = qrm(args, stdin);

@@ -167,8 +167,8 @@ pub const SECONDS_PER_NAVIGATION: f64 = 6.4e-3;
 /// Pairs a setting with `pairs` left out is estimated at: every start/goal pair of a world,
 /// 39,800 per obstacle size in the full-scale run (issue 36's audit).
 pub const ALL_PAIRS_ESTIMATE: usize = 40_000;
-/// The most CPU time a Table 4.1 config may be estimated at (s): 48 core-hours.
-pub const MAX_CORE_SECONDS: f64 = 48.0 * 3600.0;
+/// The most CPU time a Table 4.1 config may be estimated at (s): the studies' one limit.
+pub const MAX_CORE_SECONDS: f64 = pqrm::study::MAX_STUDY_CORE_HOURS * 3600.0;
 
 /// What the study runs.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]

@@ -72,8 +72,8 @@ pub const MAX_MU: usize = 10_000;
 /// --quick` (4.0 × 10⁶ units: 3 datasets × 6 × 8 searches × 5 × (2,000 + 60²)) took 2.7 s of
 /// CPU.
 pub const SECONDS_PER_UNIT: f64 = 6.7e-7;
-/// The most CPU time a config may be estimated at (s): 48 core-hours.
-pub const MAX_CORE_SECONDS: f64 = 48.0 * 3600.0;
+/// The most CPU time a config may be estimated at (s): the studies' one limit.
+pub const MAX_CORE_SECONDS: f64 = pqrm::study::MAX_STUDY_CORE_HOURS * 3600.0;
 
 fn check(config: &StudyConfig) -> Result<()> {
     if config.datasets.is_empty() {
