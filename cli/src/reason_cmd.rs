@@ -515,6 +515,13 @@ fn infer(args: &InferArgs) -> Result<()> {
         report.informative(),
         args.out.display()
     )?;
+    if let Some(note) = report.uninformative_note() {
+        eprintln!("{note}");
+    } else if report.inferences.is_empty() && args.sets.is_empty() {
+        eprintln!(
+            "every set of the map's landmarks was observed: there is nothing unseen to infer"
+        );
+    }
     Ok(())
 }
 

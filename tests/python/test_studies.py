@@ -50,6 +50,29 @@ def test_a_run_is_typed_and_judged(small_run):
     assert len(small_run["output"]["records"]) == 60
 
 
+class _Bar:
+    """What tqdm offers qrm: `total` and `update(n)`; records what qrm did with them."""
+
+    def __init__(self) -> None:
+        self.total = None
+        self.n = 0
+        self.totals_seen: list = []
+
+    def update(self, n: int = 1) -> None:
+        self.totals_seen.append(self.total)
+        self.n += n
+
+
+@pytest.mark.parametrize("name", ["table-4-1", "field", "demo"])
+def test_a_bars_total_is_known_before_it_moves_and_is_met(name):
+    # issue 40: the total grew ~20x during `qrm.studies.run` (97 %, then back), 0 for 38 s
+    cfg = small_config() if name == "table-4-1" else qrm.studies.config(name)
+    bar = _Bar()
+    qrm.studies.run(name, cfg, progress=bar)
+    assert bar.totals_seen and set(bar.totals_seen) == {bar.total}, bar.totals_seen[:5]
+    assert bar.n == bar.total > 0
+
+
 def test_python_and_the_cli_write_the_same_table(small_run, qrm_bin, tmp_path):
     # the flat fields as TOML; the tables (schedule, references) are the built-in ones
     toml_lines = []

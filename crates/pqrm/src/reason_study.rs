@@ -8,7 +8,7 @@
 //!     how many of those are truly wrong (precision) and how many wrong entries it finds
 //!     (recall).
 
-use qsr_core::progress::Progress;
+use qsr_core::progress::{Progress, phase};
 use std::collections::BTreeMap;
 
 use qsr_core::{Calculus, StateId};
@@ -434,9 +434,12 @@ fn build_map(
     calc: &Calculus,
     scans: &[crate::observation::Scan],
     config: PqrmConfig,
+    progress: &dyn Progress,
 ) -> Result<Pqrm> {
     let mut map = Pqrm::new(calc.clone(), config)?;
     for scan in scans {
+        progress.check()?;
+        progress.tick();
         if scan.observations.len() >= 3 {
             map.update(scan)?;
         }
@@ -460,6 +463,7 @@ fn score_hidden(
     targets: &[LandmarkSet],
     epsilon: f64,
     accs: &mut Accumulators,
+    progress: &dyn Progress,
 ) -> Result<()> {
     let calc = visible.calculus();
     let q = calc.n_states();
@@ -474,6 +478,7 @@ fn score_hidden(
     let prior = ml_prior(visible);
     let uniform = vec![1.0 / q as f64; q];
     for set in targets {
+        progress.check()?;
         let Some(t) = truth.state(calc, set)? else {
             continue;
         };
@@ -502,6 +507,7 @@ fn score_unseen(
     rounds: usize,
     accs: &mut Accumulators,
     reached: &mut Accumulators,
+    progress: &dyn Progress,
 ) -> Result<Vec<usize>> {
     let calc = map.calculus();
     let q = calc.n_states();
@@ -509,6 +515,7 @@ fn score_unseen(
     let uniform = vec![1.0 / q as f64; q];
     let mut per_round = vec![0; rounds + 1];
     for f in Fusion::ALL {
+        progress.check()?;
         let mut inferrer = Inferrer::new(
             map,
             InferOptions {
@@ -519,6 +526,7 @@ fn score_unseen(
         )?;
         let inferences = inferrer.infer_unseen();
         for inf in &inferences {
+            progress.check()?;
             let set = LandmarkSet::new(inf.set[0], inf.set[1], inf.set[2]);
             if f == Fusion::Fitted {
                 per_round[inf.round] += 1;
@@ -571,8 +579,7 @@ pub fn run_reason_study(
     for name in &config.calculi {
         let calc = Calculus::resolve(name)?;
         // (a) and (c): the full map of the recording.
-        let full = build_map(&calc, &dataset.scans, config.map)?;
-        progress.tick();
+        let full = build_map(&calc, &dataset.scans, config.map, progress)?;
         let sets: Vec<LandmarkSet> = observed_sets(&full)
             .into_iter()
             .filter(|s| truth.state(&calc, s).ok().flatten().is_some())
@@ -633,7 +640,15 @@ fn hide_and_infer(
             !hidden_set.contains(&ids)
         });
         let targets: Vec<LandmarkSet> = hidden.iter().flat_map(|s| orderings(*s)).collect();
-        score_hidden(&visible, full, truth, &targets, config.epsilon, &mut accs)?;
+        score_hidden(
+            &visible,
+            full,
+            truth,
+            &targets,
+            config.epsilon,
+            &mut accs,
+            progress,
+        )?;
         if repeat == 0 {
             picture = reference_pair_picture(&visible, truth, &hidden, config.epsilon)?;
         }
@@ -698,14 +713,18 @@ fn infer_unseen_in_simulation(
             ..config.world.clone()
         };
         let (wtruth, scans) = simulate_trial(&world, config.sigma_b, 0, w);
-        let map = build_map(
-            calc,
-            &scans,
-            PqrmConfig {
-                seed: config.map.seed ^ w as u64,
-                ..config.map
-            },
-        )?;
+        // a simulated world's map is part of its one unit
+        let map = phase(progress, 0, |p| {
+            build_map(
+                calc,
+                &scans,
+                PqrmConfig {
+                    seed: config.map.seed ^ w as u64,
+                    ..config.map
+                },
+                p,
+            )
+        })?;
         let per_round = score_unseen(
             &map,
             &wtruth,
@@ -713,6 +732,7 @@ fn infer_unseen_in_simulation(
             config.rounds,
             &mut accs_b,
             &mut reached_b,
+            progress,
         )?;
         unseen_sets += per_round.iter().sum::<usize>();
         for (total, n) in unseen_rounds.iter_mut().zip(per_round) {
@@ -785,10 +805,12 @@ fn reference_pair_picture(
 }
 
 impl ReasonStudyConfig {
-    /// Units of work [`run_reason_study`] reports through `progress`.
+    /// Units of work [`run_reason_study`] reports through `progress` over a recording of
+    /// `frames` frames: per calculus, each frame mapped, each hiding repeat, the check, each
+    /// simulated world.
     #[must_use]
-    pub fn work_units(&self) -> u64 {
-        (self.calculi.len() * (2 + self.repeats + self.worlds_b)) as u64
+    pub fn work_units(&self, frames: usize) -> u64 {
+        (self.calculi.len() * (frames + 1 + self.repeats + self.worlds_b)) as u64
     }
 }
 

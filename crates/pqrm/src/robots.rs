@@ -37,6 +37,7 @@ pub fn map_scans(
         .iter()
         .filter(|s| robot.is_none_or(|r| s.robot == r))
     {
+        progress.check()?;
         progress.tick();
         map.update(scan)?;
     }

@@ -730,6 +730,7 @@ pub fn run_real_tempered(
         })
         .collect();
     for (step, scan) in dataset.scans.iter().enumerate() {
+        progress.check()?;
         progress.tick();
         if scan.observations.len() < 3 {
             continue;

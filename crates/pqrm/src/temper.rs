@@ -330,6 +330,7 @@ fn block_sums(
     let mut blocks: Vec<HashMap<LandmarkSet, BlockSums>> =
         calculi.iter().map(|_| HashMap::new()).collect();
     for (i, scan) in scans.iter().enumerate() {
+        progress.check()?;
         progress.tick();
         if scan.observations.len() < 3 {
             continue;
@@ -434,6 +435,7 @@ fn held_out_scores(
     };
     let mut block = 0;
     for (i, scan) in scans.iter().enumerate() {
+        progress.check()?;
         progress.tick();
         let b = block_of(i, n, k);
         if b != block {

@@ -126,6 +126,90 @@ impl Progress for Watch {
     }
 }
 
+/// Runs a phase of work counted as exactly `units` units: the ticks `f` makes pass through
+/// (at most `units` of them), and once it returns, the units it did not tick — a phase that
+/// found less to do, skipped cached work or failed part-way — are ticked for it (unless the
+/// caller asked the work to stop).
+///
+/// Why: a total announced before the work starts ([`FixedTotal`]) must be met exactly, or the
+/// bar ends short of 100 % or runs past it; counting that holds by construction beats
+/// counting every early exit by hand.
+///
+/// ```
+/// use qsr_core::progress::{Progress, Watch, phase};
+///
+/// let watch = Watch::new();
+/// let found = phase(&watch, 10, |p| {
+///     for _ in 0..4 {
+///         p.tick(); // only four of the ten units had work to do
+///     }
+///     "done early"
+/// });
+/// assert_eq!((found, watch.done()), ("done early", 10));
+/// ```
+pub fn phase<T>(progress: &dyn Progress, units: usize, f: impl FnOnce(&dyn Progress) -> T) -> T {
+    struct Counted<'a> {
+        inner: &'a dyn Progress,
+        left: AtomicUsize,
+    }
+    impl Progress for Counted<'_> {
+        fn tick(&self) {
+            let had = self
+                .left
+                .fetch_update(Ordering::Relaxed, Ordering::Relaxed, |n| n.checked_sub(1));
+            if had.is_ok() {
+                self.inner.tick();
+            }
+        }
+        fn cancelled(&self) -> bool {
+            self.inner.cancelled()
+        }
+    }
+    let counted = Counted {
+        inner: progress,
+        left: AtomicUsize::new(units),
+    };
+    let out = f(&counted);
+    // a stopped run ends where it stopped: the bar does not jump to the phase's end
+    if !progress.cancelled() {
+        for _ in 0..counted.left.load(Ordering::Relaxed) {
+            progress.tick();
+        }
+    }
+    out
+}
+
+/// A [`Progress`] whose total was announced before the work started: it passes ticks and
+/// stop requests through and drops the work's own [`Progress::add_total`] calls.
+///
+/// Why: work announces its units as it learns them (per setting, once tasks are drawn), so
+/// a bar fed those grows while it runs. A caller that can count the units up front (every
+/// study can: `Study::shard_units`) announces them once and wraps the progress in this, and
+/// the bar's total is fixed from the first frame.
+///
+/// ```
+/// use qsr_core::progress::{FixedTotal, Progress, Watch};
+///
+/// let watch = Watch::new();
+/// watch.add_total(2);
+/// let fixed = FixedTotal(&watch);
+/// fixed.add_total(5); // the work's own announcement: dropped
+/// fixed.tick();
+/// assert_eq!((watch.done(), watch.total()), (1, 2));
+/// ```
+#[derive(Clone, Copy)]
+pub struct FixedTotal<'a>(pub &'a dyn Progress);
+
+impl Progress for FixedTotal<'_> {
+    fn tick(&self) {
+        self.0.tick();
+    }
+
+    fn cancelled(&self) -> bool {
+        self.0.cancelled()
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -13,8 +13,13 @@
 //! a local [`Study::run`] *is* the aggregate of every shard run here — so a sweep on a cluster
 //! gives the local result exactly, and a missing or duplicated shard is an error. An output
 //! holds no timings for the same reason: the same config gives the same bytes.
+//!
+//! **Progress.** A shard ticks [`Study::shard_units`] units — counted from the config before
+//! any work — and checks for a stop between units (a unit is under a second at the thesis's
+//! settings). [`Study::run`] and [`AnyStudy::run_shard`] announce the total once, before the
+//! first tick, so a bar's total never moves while the work runs.
 
-use qsr_core::progress::Progress;
+use qsr_core::progress::{FixedTotal, Progress};
 use serde::Serialize;
 use serde::de::DeserializeOwned;
 
@@ -54,7 +59,15 @@ pub trait Study {
     /// # Errors
     /// As [`Study::check`].
     fn shards(config: &Self::Config) -> Result<usize>;
-    /// Runs shard `index`; `progress` ticks per unit of work and can stop it.
+    /// The units of work shard `index` ticks, counted before it runs (it may read the
+    /// inputs, never do the work).
+    ///
+    /// # Errors
+    /// As [`Study::check`]; [`StudyError::InvalidParameter`] for an index beyond
+    /// [`Study::shards`]; an input that cannot be read.
+    fn shard_units(config: &Self::Config, index: usize) -> Result<usize>;
+    /// Runs shard `index`; `progress` ticks per unit of work and can stop it. Called through
+    /// [`Study::run`] or [`AnyStudy::run_shard`], which announce the units up front.
     ///
     /// # Errors
     /// The study's errors; [`StudyError::Cancelled`] when `progress` asked it to stop;
@@ -75,8 +88,15 @@ pub trait Study {
     /// As [`Study::run_shard`].
     fn run(config: &Self::Config, progress: &dyn Progress) -> Result<Self::Output> {
         Self::check(config)?;
-        let shards = (0..Self::shards(config)?)
-            .map(|i| Self::run_shard(config, i, progress).map(|s| (i, s)))
+        let n = Self::shards(config)?;
+        let mut units = 0usize;
+        for i in 0..n {
+            units = units.saturating_add(Self::shard_units(config, i)?);
+        }
+        progress.add_total(units);
+        let fixed = FixedTotal(progress);
+        let shards = (0..n)
+            .map(|i| Self::run_shard(config, i, &fixed).map(|s| (i, s)))
             .collect::<Result<Vec<_>>>()?;
         Self::aggregate(config, shards)
     }
@@ -243,7 +263,8 @@ impl<S: Study> AnyStudy for Registered<S> {
         progress: &dyn Progress,
     ) -> Result<serde_json::Value> {
         let c = read::<S>(config)?;
-        to_json(&S::run_shard(&c, index, progress)?, "shard")
+        progress.add_total(S::shard_units(&c, index)?);
+        to_json(&S::run_shard(&c, index, &FixedTotal(progress))?, "shard")
     }
     fn aggregate(
         &self,

@@ -121,3 +121,30 @@ fn a_cancelled_demo_stops_with_cancelled() {
     let e = Demo::run(&DemoConfig::new(1), &Stop).unwrap_err();
     assert!(e.is_cancelled(), "{e}");
 }
+
+/// Regression (issue 40): the demo tried at most 24 runs, so seed 9 showed a failed run
+/// though its 30th pair reaches its goal. Every pair with a plan is tried now, in batches
+/// whose choice — the first success in the rule's order — does not depend on the threads.
+#[test]
+fn regression_the_demo_tries_every_pair_before_it_shows_a_failure() {
+    let config = DemoConfig::new(9);
+    let one = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .unwrap()
+        .install(|| Demo::run(&config, &|| {}).unwrap());
+    let run = &one.run;
+    assert!(
+        run.outcome.success,
+        "seed 9: {} tried of {}",
+        run.tried, run.candidates
+    );
+    assert!(
+        run.tried > 24 && run.tried <= run.candidates,
+        "{} tried",
+        run.tried
+    );
+    let many = Demo::run(&config, &|| {}).unwrap();
+    assert_eq!((many.run.goal, many.run.tried), (run.goal, run.tried));
+    assert_eq!(many.run.outcome, run.outcome);
+}

@@ -126,7 +126,7 @@ fn start_goal_draws_are_out_of_view_and_reachable() {
         ..FieldParams::quick(4)
     };
     let f = map_field(&params).unwrap();
-    let (ts, draws) = tasks(&f, &params).unwrap();
+    let (ts, draws) = tasks(&f, &params, &|| {}).unwrap();
     assert_eq!(ts.len(), 8);
     assert_eq!(draws.kept, 8);
     for t in &ts {

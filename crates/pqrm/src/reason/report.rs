@@ -93,6 +93,44 @@ impl InferenceReport {
             .filter(|i| i.entropy < uniform - INFORMATIVE_NATS)
             .count()
     }
+
+    /// Why inferences say little, for people: how many had no path and how many had paths
+    /// that composed to about uniform; `None` when every inference is informative (or there
+    /// are none). Issue 40: `qrm reason infer` printed "0 more informative than uniform" and
+    /// left the user to guess why.
+    #[must_use]
+    pub fn uninformative_note(&self) -> Option<String> {
+        let total = self.inferences.len();
+        let vague = total - self.informative();
+        if vague == 0 {
+            return None;
+        }
+        let no_path = self.inferences.iter().filter(|i| i.paths == 0).count();
+        let composed = vague - no_path;
+        let mut why = Vec::new();
+        if no_path > 0 {
+            why.push(format!(
+                "{no_path} have no path — a set {{a, b, d}} is composed through a fourth landmark c \
+                 from two sets that hold c, {{a, b, c}} and {{b, c, d}} in some order, and for these no \
+                 landmark c has both among the map's sets (observed, or inferred within {} \
+                 round{}), so they stay uniform",
+                self.rounds,
+                if self.rounds == 1 { "" } else { "s" }
+            ));
+        }
+        if composed > 0 {
+            why.push(format!(
+                "{composed} have paths whose composition stays within {INFORMATIVE_NATS} nats of \
+                 uniform (`{}`'s composition constrains little there, or the beliefs composed are \
+                 themselves uncertain)",
+                self.calculus
+            ));
+        }
+        Some(format!(
+            "{vague} of {total} inferred sets are no more informative than uniform: {}",
+            why.join("; ")
+        ))
+    }
 }
 
 impl MapCheck {
@@ -121,5 +159,65 @@ impl MapCheck {
             }
         }
         s
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn set(p: Vec<f64>, paths: usize) -> InferredSet {
+        InferredSet {
+            entropy: crate::metrics::entropy(&p),
+            ml: "a".into(),
+            p,
+            paths,
+            round: usize::from(paths > 0),
+            set: [1, 2, 3],
+            via: Vec::new(),
+        }
+    }
+
+    fn report(inferences: Vec<InferredSet>) -> InferenceReport {
+        InferenceReport {
+            alpha: 0.5,
+            calculus: "left-right".into(),
+            epsilon: 0.01,
+            fusion: "fitted",
+            inferences,
+            rounds: 2,
+            states: vec!["a".into(), "b".into()],
+        }
+    }
+
+    /// Issue 40: `qrm reason infer` on MRCLAM Dataset 7 said "0 more informative than
+    /// uniform" and no more; the note says how many had no path and how many composed to
+    /// about uniform.
+    #[test]
+    fn regression_an_uninformative_inference_run_says_why() {
+        let uniform = || vec![0.5, 0.5];
+        let mixed = report(vec![
+            set(uniform(), 0),
+            set(uniform(), 0),
+            set(uniform(), 3),
+            set(vec![0.9, 0.1], 2),
+        ]);
+        assert_eq!(mixed.informative(), 1);
+        let note = mixed.uninformative_note().unwrap_or_default();
+        assert!(note.starts_with("3 of 4 inferred sets"), "{note}");
+        assert!(note.contains("2 have no path"), "{note}");
+        assert!(note.contains("within 2 rounds"), "{note}");
+        assert!(note.contains("1 have paths whose composition"), "{note}");
+        let all_without = report(vec![set(uniform(), 0)]);
+        let note = all_without.uninformative_note().unwrap_or_default();
+        assert!(
+            note.contains("1 have no path") && !note.contains("composition stays"),
+            "{note}"
+        );
+        assert_eq!(
+            report(vec![set(vec![0.99, 0.01], 1)]).uninformative_note(),
+            None
+        );
+        assert_eq!(report(Vec::new()).uninformative_note(), None);
     }
 }

@@ -294,7 +294,8 @@ def qlink_study(
     progress: Optional[Progress] = None,
 ) -> types.QlinkStudy:
     """The §4.4.1 study (Table 4.1): `{"table": [...], "records": [...]}`. `progress` counts
-    navigations."""
+    each world's map, a distance field per goal landmark and every navigation, its total known
+    before the first."""
     result: types.QlinkStudy = json.loads(
         _qrm.qlink_study(trial, quick, pairs, seed, progress=_progress_callback(progress))
     )

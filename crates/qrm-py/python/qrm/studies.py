@@ -55,7 +55,8 @@ def run(
     """Runs study `name` with `config` (a dict as `config` returns; None: the built-in quick
     config with `quick=True`, else the thesis's) and returns its config, output and report.
     A config field of the wrong name or type raises `InvalidInput` naming it. `progress` counts
-    the study's units of work (navigations, trials, folds)."""
+    the study's units of work (maps, navigations, trials, folds), the whole total announced
+    before the first; Ctrl-C stops the run within a second."""
     text = None if config is None else _config_json(config)
     return _as_run(_qrm.studies_run(name, text, quick, seed, progress=_progress_callback(progress)))
 

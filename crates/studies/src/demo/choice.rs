@@ -8,8 +8,10 @@ use serde::{Deserialize, Serialize};
 use crate::error::{Result, StudyError};
 use crate::world_perception::WorldPerception;
 
-/// Most navigations the demo tries before it shows the longest run it made.
-pub const MAX_TRIES: usize = 24;
+/// Navigations run side by side while looking for the first success: the choice is the first
+/// success in [`RUN_RULE`]'s order whatever the batch, so it does not depend on the thread
+/// count.
+const BATCH: usize = 8;
 
 /// Poses of the mapping drive considered as starts: every this many frames that saw three
 /// landmarks.
@@ -18,7 +20,7 @@ pub const START_EVERY: usize = 10;
 /// The rule the demo picks its run by (in `summary.json`).
 pub const RUN_RULE: &str = "starts: every 10th pose of the mapping drive that saw three landmarks; \
 goals: every mapped landmark out of view there; pairs tried longest plan first (ties: the \
-farthest goal), the first run that reaches its goal is shown (at most 24 runs, else the longest plan's run)";
+farthest goal); every pair is tried in that order until one reaches its goal, and that run is shown; when none does, the demo says so and shows the longest plan's run";
 
 /// What a navigation runs in.
 pub struct Setting<'a> {
@@ -94,8 +96,8 @@ fn pairs(s: &Setting<'_>, frames: &[sim2d::Frame], goal: Option<u32>) -> Vec<Pai
     pairs
 }
 
-/// Picks the run by [`RUN_RULE`]: the longest plan that succeeds. With `goal`, only that
-/// goal is considered.
+/// Picks the run by [`RUN_RULE`]: the longest plan that succeeds, trying every pair with a
+/// plan before it says none does. With `goal`, only that goal is considered.
 ///
 /// # Errors
 /// Q-Link's; [`StudyError::InvalidParameter`] when no pair has a plan;
@@ -106,28 +108,37 @@ pub fn choose_run(
     goal: Option<u32>,
     progress: &dyn Progress,
 ) -> Result<Chosen> {
+    use rayon::prelude::*;
     let pairs = pairs(s, frames, goal);
     let candidates = pairs.len();
     let nav = Navigator::new(s.map, s.graph, s.perception, s.config)?;
-    let mut first: Option<Chosen> = None;
-    for (k, &(_, _, start, l)) in pairs.iter().take(MAX_TRIES).enumerate() {
-        progress.check()?;
-        let outcome = nav.navigate(start, l, None, true)?;
-        let run = Chosen {
-            start,
-            goal: l,
-            outcome,
-            tried: k + 1,
-            candidates,
-        };
-        if run.outcome.success {
+    let mut longest: Option<Chosen> = None;
+    for (b, batch) in pairs.chunks(BATCH).enumerate() {
+        let runs = batch
+            .par_iter()
+            .enumerate()
+            .map(|(k, &(_, _, start, l))| {
+                progress.check()?;
+                Ok(Chosen {
+                    start,
+                    goal: l,
+                    outcome: nav.navigate(start, l, None, true)?,
+                    tried: b * BATCH + k + 1,
+                    candidates,
+                })
+            })
+            .collect::<Result<Vec<Chosen>>>()?;
+        let mut runs = runs.into_iter();
+        if longest.is_none() {
+            longest = runs.clone().next();
+        }
+        if let Some(run) = runs.find(|r| r.outcome.success) {
             return Ok(run);
         }
-        first.get_or_insert(run);
     }
-    match first {
+    match longest {
         Some(mut run) => {
-            run.tried = MAX_TRIES.min(candidates);
+            run.tried = candidates;
             Ok(run)
         }
         None => Err(StudyError::InvalidParameter(match goal {

@@ -96,13 +96,16 @@ pub struct DemoOutput {
     pub log: Attachment,
 }
 
+/// The demo's units of progress: mapping, the calculus and map, the navigation.
+const UNITS: usize = 3;
+
 /// Runs the demo of `config`.
 ///
 /// # Errors
 /// The crates' errors; [`StudyError::InvalidParameter`] when the seed's drive or the goal
 /// leaves nothing to navigate; [`StudyError::Cancelled`] when `progress` asks.
 fn run(config: &DemoConfig, progress: &dyn Progress) -> Result<DemoOutput> {
-    progress.add_total(3);
+    progress.add_total(UNITS);
     let mapping = pipeline::map_by_lidar(config.seed)?;
     let (flip, entropy) = pipeline::flip_flop_map(&mapping.scans, config.seed)?;
     progress.tick();
@@ -159,10 +162,10 @@ impl Study for Demo {
     const NAME: &'static str = "demo";
     const ABOUT: &'static str = "DESIGN §1: the whole pipeline — lidar mapping, PQRM, a calculus learned by SERGE, \
          Q-Link across the field site, an MCAP log for Foxglove";
-    /// Seed 1: its field world's map gives a three-transition run that reaches its goal (220 m,
-    /// 1.1 s). Seeds 0 and 3 map 81–85 landmark ids, about half of them false (the lidar
-    /// extractor's, issue 36), and none of their 24 runs tried reaches its goal — the demo says
-    /// so plainly for any seed it is given.
+    /// Seed 1: its field world's map gives a three-transition run that reaches its goal on
+    /// the first pair tried (220 m, under a second). Other seeds are shown the same way: every
+    /// seed measured (0–14) has a pair that reaches its goal (seed 9 on its 30th of 103), and a
+    /// seed without one is said to have none.
     const DEFAULT_SEED: u64 = 1;
     type Config = DemoConfig;
     type Output = DemoOutput;
@@ -188,6 +191,16 @@ impl Study for Demo {
     fn shards(config: &DemoConfig) -> Result<usize> {
         Self::check(config)?;
         Ok(1)
+    }
+    /// Mapping, the calculus and map, the navigation.
+    fn shard_units(config: &DemoConfig, index: usize) -> Result<usize> {
+        Self::shards(config)?;
+        if index != 0 {
+            return Err(StudyError::InvalidParameter(format!(
+                "the demo is one shard, not shard {index}"
+            )));
+        }
+        Ok(UNITS)
     }
     fn run_shard(config: &DemoConfig, index: usize, progress: &dyn Progress) -> Result<DemoOutput> {
         Self::check(config)?;

@@ -49,8 +49,9 @@ fn story(config: &DemoConfig, o: &DemoOutput) -> String {
         )
     } else {
         format!(
-            "none of the {} runs tried reached its goal: this is the longest plan's run",
-            run.tried
+            "none of the {} start/goal pairs with a plan reaches its goal for seed {}: this is \
+             the longest plan's run",
+            run.tried, config.seed
         )
     };
     format!(

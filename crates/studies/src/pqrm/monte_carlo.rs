@@ -7,7 +7,7 @@ use pqrm::study::{
     run_monte_carlo, run_monte_carlo_shard,
 };
 use qsr_core::Calculus;
-use qsr_core::progress::Progress;
+use qsr_core::progress::{FixedTotal, Progress};
 
 use crate::error::{Result, StudyError};
 use crate::report::{Cell, Claim, Column, Figure, Line, Plot, Report, Table, Verdict};
@@ -32,6 +32,17 @@ pub fn trial_ranges(config: &MonteCarloConfig) -> Vec<(usize, usize)> {
         .step_by(size)
         .map(|start| (start, size.min(n - start)))
         .collect()
+}
+
+/// Shard `index`'s `(first trial, trials)`.
+fn trial_range(config: &MonteCarloConfig, index: usize) -> Result<(usize, usize)> {
+    let ranges = trial_ranges(config);
+    ranges.get(index).copied().ok_or_else(|| {
+        StudyError::InvalidParameter(format!(
+            "shard {index} of a study with {} shards",
+            ranges.len()
+        ))
+    })
 }
 
 impl Study for MonteCarlo {
@@ -62,18 +73,17 @@ impl Study for MonteCarlo {
     fn shards(config: &MonteCarloConfig) -> Result<usize> {
         Ok(trial_ranges(config).len())
     }
+    /// A trial per noise level and trial of the range.
+    fn shard_units(config: &MonteCarloConfig, index: usize) -> Result<usize> {
+        let (_, count) = trial_range(config, index)?;
+        Ok(config.sigmas.len() * count)
+    }
     fn run_shard(
         config: &MonteCarloConfig,
         index: usize,
         progress: &dyn Progress,
     ) -> Result<Vec<TrialRecord>> {
-        let ranges = trial_ranges(config);
-        let &(start, count) = ranges.get(index).ok_or_else(|| {
-            StudyError::InvalidParameter(format!(
-                "shard {index} of a study with {} shards",
-                ranges.len()
-            ))
-        })?;
+        let (start, count) = trial_range(config, index)?;
         Ok(run_monte_carlo_shard(config, start, count, progress)?)
     }
     fn aggregate(
@@ -86,7 +96,9 @@ impl Study for MonteCarlo {
     }
     /// Every trial in one parallel loop (the shards' records, aggregated the same way).
     fn run(config: &MonteCarloConfig, progress: &dyn Progress) -> Result<MonteCarloResult> {
-        Ok(run_monte_carlo(config, progress)?)
+        Self::check(config)?;
+        progress.add_total(config.sigmas.len() * config.trials);
+        Ok(run_monte_carlo(config, &FixedTotal(progress))?)
     }
     fn report(config: &MonteCarloConfig, output: &MonteCarloResult) -> Report {
         report(config, output)

@@ -15,7 +15,7 @@
 //! its five settings); each occlusion setting maps its own world of discs, with occlusion
 //! (the whole experiment happens in that environment).
 
-use qsr_core::progress::Progress;
+use qsr_core::progress::{FixedTotal, Progress, phase};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
@@ -553,15 +553,34 @@ pub fn pairs(landmarks: &[(u32, [f64; 2])], n: Option<usize>, seed: u64) -> Vec<
 ///
 /// # Errors
 /// [`QlinkError::UnknownLandmark`] for a goal not in the map.
-pub fn fields(world: &StudyWorld, pairs: &[(u32, u32)]) -> Result<Vec<(u32, DistanceField)>> {
+pub fn fields(
+    world: &StudyWorld,
+    pairs: &[(u32, u32)],
+    progress: &dyn Progress,
+) -> Result<Vec<(u32, DistanceField)>> {
+    let goals = goals(pairs);
+    let fields: Vec<Option<(u32, DistanceField)>> = goals
+        .par_iter()
+        .map(|&g| {
+            progress.check()?;
+            let field = if world.map.elements_with(g).is_empty() {
+                None
+            } else {
+                Some((g, world.graph.distance_field(&world.map, g)?))
+            };
+            progress.tick();
+            Ok(field)
+        })
+        .collect::<Result<_>>()?;
+    Ok(fields.into_iter().flatten().collect())
+}
+
+/// The goal landmarks of `pairs`, each once, in order.
+fn goals(pairs: &[(u32, u32)]) -> Vec<u32> {
     let mut goals: Vec<u32> = pairs.iter().map(|p| p.1).collect();
     goals.sort_unstable();
     goals.dedup();
     goals
-        .par_iter()
-        .filter(|g| !world.map.elements_with(**g).is_empty())
-        .map(|&g| Ok((g, world.graph.distance_field(&world.map, g)?)))
-        .collect()
 }
 
 fn run_pairs<P: Perception>(
@@ -752,10 +771,42 @@ pub struct WorldShard {
     pub settings: Vec<(usize, Vec<TrialRecord>, SettingInfo)>,
 }
 
+/// The config's settings and the landmark size of world `index` of [`worlds`].
+fn world_settings(config: &StudyConfig, index: usize) -> Result<(Vec<Setting>, Option<f64>)> {
+    let settings = config.settings()?;
+    let all = worlds(&settings);
+    let Some(&size) = all.get(index) else {
+        return Err(StudyError::InvalidParameter(format!(
+            "world {index} of a study with {} worlds",
+            all.len()
+        )));
+    };
+    Ok((settings, size))
+}
+
+/// The units of progress world `index` of [`worlds`] ticks in [`run_world`]: its map, a
+/// distance field per goal landmark, every navigation of its settings — counted from the
+/// scenario's landmarks without mapping.
+///
+/// # Errors
+/// As [`run_world`].
+pub fn world_units(config: &StudyConfig, index: usize) -> Result<usize> {
+    let (settings, size) = world_settings(config, index)?;
+    let scenario = sim2d::scenario("qlink-200", config.seed, None)?;
+    let landmarks: Vec<(u32, [f64; 2])> = scenario.world.landmark_positions().collect();
+    let navigations: usize = settings
+        .iter()
+        .filter(|s| world_of(s).map(f64::to_bits) == size.map(f64::to_bits))
+        .map(|s| pairs(&landmarks, s.pairs, config.seed).len())
+        .sum();
+    Ok(1 + goals(&pairs(&landmarks, None, config.seed)).len() + navigations)
+}
+
 /// Runs the settings of world `index` of [`worlds`]: maps it once, then navigates each of its
 /// settings. A shard depends on the config and its index alone, so shards can run anywhere,
-/// in any order. `progress` is told each setting's navigations as the setting starts, ticks
-/// after every navigation and is checked before each setting and navigation.
+/// in any order. `progress` ticks [`world_units`] units (announce them first: this announces
+/// nothing) — the map, each goal's distance field, each navigation — and is checked between
+/// them.
 ///
 /// # Errors
 /// As [`build_world`] and [`run_setting`]; [`StudyError::InvalidParameter`] for an index
@@ -765,17 +816,15 @@ pub fn run_world(
     index: usize,
     progress: &dyn Progress,
 ) -> Result<WorldShard> {
-    let settings = config.settings()?;
-    let all = worlds(&settings);
-    let Some(&size) = all.get(index) else {
-        return Err(StudyError::InvalidParameter(format!(
-            "world {index} of a study with {} worlds",
-            all.len()
-        )));
-    };
+    let (settings, size) = world_settings(config, index)?;
     progress.check()?;
-    let world = build_world(config.seed, config.samples, size)?;
-    let fields = fields(&world, &pairs(&world.landmarks, None, config.seed))?;
+    let world = phase(progress, 1, |_| {
+        build_world(config.seed, config.samples, size)
+    })?;
+    let every_pair = pairs(&world.landmarks, None, config.seed);
+    let fields = phase(progress, goals(&every_pair).len(), |p| {
+        fields(&world, &every_pair, p)
+    })?;
     let mut out = Vec::new();
     for (i, setting) in settings.iter().enumerate() {
         if world_of(setting).map(f64::to_bits) != size.map(f64::to_bits) {
@@ -783,8 +832,9 @@ pub fn run_world(
         }
         progress.check()?;
         let pairs = pairs(&world.landmarks, setting.pairs, config.seed);
-        progress.add_total(pairs.len());
-        let records = run_setting(&world, config, &pairs, &fields, setting, progress)?;
+        let records = phase(progress, pairs.len(), |p| {
+            run_setting(&world, config, &pairs, &fields, setting, p)
+        })?;
         let info = SettingInfo {
             frames: world.frames,
             elements: world.map.elements().len(),
@@ -838,8 +888,14 @@ pub fn run_study(
     progress: &dyn Progress,
 ) -> Result<(Vec<TrialRecord>, Vec<SettingInfo>)> {
     let n = worlds(&config.settings()?).len();
+    let mut units = 0usize;
+    for i in 0..n {
+        units = units.saturating_add(world_units(config, i)?);
+    }
+    progress.add_total(units);
+    let progress = FixedTotal(progress);
     let shards = (0..n)
-        .map(|i| run_world(config, i, progress).map(|s| (i, s)))
+        .map(|i| run_world(config, i, &progress).map(|s| (i, s)))
         .collect::<Result<Vec<_>>>()?;
     aggregate(config, shards)
 }

@@ -280,6 +280,17 @@ impl Study for SergeStudy {
         check(config)?;
         Ok((config.folds + 1) * config.datasets.len())
     }
+    /// A fold's SERGE runs (one per μ and σ searched); the example maps are one unit.
+    fn shard_units(config: &StudyConfig, index: usize) -> Result<usize> {
+        check(config)?;
+        let (name, part) = locate(config, index)?;
+        if part < config.folds {
+            let k = dataset(name, config)?.len();
+            Ok(config.mus_for(k).len() + config.sigmas.len())
+        } else {
+            Ok(1)
+        }
+    }
     fn run_shard(
         config: &StudyConfig,
         index: usize,

@@ -19,13 +19,13 @@ mod report;
 use std::path::PathBuf;
 
 use pqrm::PqrmConfig;
-use pqrm::loaders::RangeBearingNoise;
+use pqrm::loaders::{Dataset, RangeBearingNoise};
 use pqrm::robots::{RobotComparison, compare_robots};
 use pqrm::sensor::SensorModel;
 use pqrm::study::{RealCalculusResult, SensorVariant, run_real_tempered, sensor_sweep};
 use pqrm::temper::{TemperChoice, TemperFit, TemperOptions, fit_temper};
 use qsr_core::Calculus;
-use qsr_core::progress::Progress;
+use qsr_core::progress::{Progress, phase};
 use serde::{Deserialize, Serialize};
 
 use crate::error::{Result, StudyError};
@@ -231,6 +231,16 @@ pub struct RealDataOutput {
 #[derive(Debug, Clone, Copy, Default)]
 pub struct RealData;
 
+fn check_index(c: &RealDataConfig, index: usize) -> Result<()> {
+    let n = RealData::shards(c)?;
+    if index >= n {
+        return Err(StudyError::InvalidParameter(format!(
+            "shard {index} of a study with {n} shards"
+        )));
+    }
+    Ok(())
+}
+
 impl Study for RealData {
     const NAME: &'static str = "real-data";
     const ABOUT: &'static str =
@@ -282,17 +292,22 @@ impl Study for RealData {
     fn shards(c: &RealDataConfig) -> Result<usize> {
         Ok(1 + c.variants.len())
     }
+    /// The main run's phases ([`main_units`]); a variant maps every frame once.
+    fn shard_units(c: &RealDataConfig, index: usize) -> Result<usize> {
+        check_index(c, index)?;
+        let recording = recording::read(c)?;
+        Ok(if index == 0 {
+            main_units(c, &recording.data).iter().sum()
+        } else {
+            recording.data.scans.len()
+        })
+    }
     fn run_shard(
         c: &RealDataConfig,
         index: usize,
         progress: &dyn Progress,
     ) -> Result<RealDataShard> {
-        let n = Self::shards(c)?;
-        if index >= n {
-            return Err(StudyError::InvalidParameter(format!(
-                "shard {index} of a study with {n} shards"
-            )));
-        }
+        check_index(c, index)?;
         let recording = recording::read(c)?;
         if index == 0 {
             return Ok(RealDataShard::Main(Box::new(main_run(
@@ -300,14 +315,15 @@ impl Study for RealData {
             )?)));
         }
         let v = c.variants[index - 1];
-        progress.add_total(recording.data.scans.len());
-        let rows = sensor_sweep(
-            &recording.data,
-            &c.calculi,
-            c.pqrm_config(),
-            &[(v.sensor, v.temper)],
-            progress,
-        )?;
+        let rows = phase(progress, recording.data.scans.len(), |p| {
+            sensor_sweep(
+                &recording.data,
+                &c.calculi,
+                c.pqrm_config(),
+                &[(v.sensor, v.temper)],
+                p,
+            )
+        })?;
         Ok(RealDataShard::Variant { rows })
     }
     fn aggregate(
@@ -342,10 +358,28 @@ impl Study for RealData {
     }
 }
 
+/// Units of the main run's phases over `data`: fitting τ (two passes), the main maps, the
+/// robots compared (when there are two or more), τ = 1 and the chosen τ.
+fn main_units(c: &RealDataConfig, data: &Dataset) -> [usize; 4] {
+    let frames = data.scans.len();
+    let robots = data
+        .scans
+        .iter()
+        .map(|s| s.robot)
+        .collect::<std::collections::BTreeSet<_>>()
+        .len();
+    let compared = if robots >= 2 {
+        2 * frames * c.calculi.len()
+    } else {
+        0
+    };
+    [2 * frames, frames, compared, 2 * frames]
+}
+
 /// Shard 0: τ from the data, the main maps, τ = 1 beside the chosen τ, the robots.
 fn main_run(c: &RealDataConfig, rec: Recording, progress: &dyn Progress) -> Result<MainRun> {
     let data = &rec.data;
-    let frames = data.scans.len();
+    let [fit_units, main_units, robot_units, temper_units] = main_units(c, data);
     let config = c.pqrm_config();
     let calcs = c
         .calculi
@@ -354,16 +388,14 @@ fn main_run(c: &RealDataConfig, rec: Recording, progress: &dyn Progress) -> Resu
         .collect::<std::result::Result<Vec<_>, _>>()?;
     // τ chosen from the data is always measured (the report compares it with τ = 1); the
     // main run uses it only with `temper = "auto"`.
-    progress.add_total(2 * frames);
-    let (fits, tempering_failed) = match fit_temper(
-        &calcs,
-        &data.scans,
-        config,
-        &TemperOptions::default(),
-        progress,
-    ) {
+    let fitted_or_not = phase(progress, fit_units, |p| {
+        fit_temper(&calcs, &data.scans, config, &TemperOptions::default(), p)
+    });
+    let (fits, tempering_failed) = match fitted_or_not {
         Ok(f) => (Some(f), None),
-        Err(e) if c.temper == TemperChoice::Auto => return Err(e.into()),
+        Err(e) if c.temper == TemperChoice::Auto || matches!(e, pqrm::PqrmError::Cancelled(_)) => {
+            return Err(e.into());
+        }
         Err(e) => (None, Some(e.to_string())),
     };
     let fitted: Option<Vec<f64>> = fits.as_ref().map(|f| f.iter().map(|f| f.chosen).collect());
@@ -374,40 +406,35 @@ fn main_run(c: &RealDataConfig, rec: Recording, progress: &dyn Progress) -> Resu
             return Err(StudyError::InvalidParameter("no τ was chosen".into()));
         }
     };
-    progress.add_total(frames);
-    let results = run_real_tempered(data, &c.calculi, config, &tempers, progress)?;
-    let n_robots = data
-        .scans
-        .iter()
-        .map(|s| s.robot)
-        .collect::<std::collections::BTreeSet<_>>()
-        .len();
-    let robots = if n_robots >= 2 {
-        progress.add_total(2 * frames * calcs.len());
-        compare_robots(data, &calcs, config, &tempers, progress)?
-    } else {
-        Vec::new()
-    };
-    let tempering = match (fits, fitted) {
-        (Some(fits), Some(fitted)) => {
-            progress.add_total(2 * frames);
-            let at = |ts: &[f64]| -> Result<Vec<RealCalculusResult>> {
-                if ts == tempers.as_slice() {
-                    Ok(results.clone())
-                } else {
-                    Ok(run_real_tempered(data, &c.calculi, config, ts, progress)?)
-                }
-            };
-            let untempered = at(&vec![1.0; c.calculi.len()])?;
-            let chosen = at(&fitted)?;
-            Some(Tempering {
-                fits,
-                chosen,
-                untempered,
-            })
+    let results = phase(progress, main_units, |p| {
+        run_real_tempered(data, &c.calculi, config, &tempers, p)
+    })?;
+    let robots = phase(progress, robot_units, |p| {
+        if robot_units > 0 {
+            compare_robots(data, &calcs, config, &tempers, p)
+        } else {
+            Ok(Vec::new())
         }
-        _ => None,
-    };
+    })?;
+    let tempering = phase(progress, temper_units, |p| -> Result<Option<Tempering>> {
+        let (Some(fits), Some(fitted)) = (fits, fitted) else {
+            return Ok(None);
+        };
+        let at = |ts: &[f64]| -> Result<Vec<RealCalculusResult>> {
+            if ts == tempers.as_slice() {
+                Ok(results.clone())
+            } else {
+                Ok(run_real_tempered(data, &c.calculi, config, ts, p)?)
+            }
+        };
+        let untempered = at(&vec![1.0; c.calculi.len()])?;
+        let chosen = at(&fitted)?;
+        Ok(Some(Tempering {
+            fits,
+            chosen,
+            untempered,
+        }))
+    })?;
     Ok(MainRun {
         recording: rec.summary,
         results,

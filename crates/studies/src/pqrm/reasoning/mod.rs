@@ -105,6 +105,21 @@ pub fn read_recording(config: &ReasonConfig) -> Result<Dataset> {
     Ok(data)
 }
 
+/// The study's settings for shard `index`'s calculus alone.
+fn one_calculus(config: &ReasonConfig, index: usize) -> Result<ReasonStudyConfig> {
+    ReasonStudy::check(config)?;
+    let calculus = config.study.calculi.get(index).ok_or_else(|| {
+        StudyError::InvalidParameter(format!(
+            "shard {index} of a study of {} calculi",
+            config.study.calculi.len()
+        ))
+    })?;
+    Ok(ReasonStudyConfig {
+        calculi: vec![calculus.clone()],
+        ..config.study.clone()
+    })
+}
+
 impl Study for ReasonStudy {
     const NAME: &'static str = "reason";
     const ABOUT: &'static str = "new (§3.3.2 measures none): inference of hidden and never-seen triplets by composition, consistency checks, on MRCLAM";
@@ -132,24 +147,21 @@ impl Study for ReasonStudy {
         Self::check(config)?;
         Ok(config.study.calculi.len())
     }
+    /// Each frame of the recording mapped, each hiding repeat, the check, each simulated
+    /// world ([`ReasonStudyConfig::work_units`] of the one calculus).
+    fn shard_units(config: &ReasonConfig, index: usize) -> Result<usize> {
+        let one = one_calculus(config, index)?;
+        let frames = read_recording(config)?.scans.len();
+        Ok(usize::try_from(one.work_units(frames)).unwrap_or(usize::MAX))
+    }
     fn run_shard(
         config: &ReasonConfig,
         index: usize,
         progress: &dyn Progress,
     ) -> Result<ReasonShard> {
-        Self::check(config)?;
-        let calculus = config.study.calculi.get(index).ok_or_else(|| {
-            StudyError::InvalidParameter(format!(
-                "shard {index} of a study of {} calculi",
-                config.study.calculi.len()
-            ))
-        })?;
+        let one = one_calculus(config, index)?;
+        let calculus = one.calculi[0].clone();
         let data = read_recording(config)?;
-        let one = ReasonStudyConfig {
-            calculi: vec![calculus.clone()],
-            ..config.study.clone()
-        };
-        progress.add_total(usize::try_from(one.work_units()).unwrap_or(usize::MAX));
         let mut results = run_reason_study(&data, &one, progress)?;
         let result = results.pop().ok_or_else(|| {
             StudyError::InvalidParameter(format!("no result for calculus `{calculus}`"))

@@ -5,7 +5,7 @@ use qsr_core::progress::Progress;
 use qsr_core::stats::MeanSd;
 
 use super::summary::{BoundRange, bound_summary, map_size, restricted_plans, summarise};
-use super::trials::{FieldTask, FieldTrial, run_field};
+use super::trials::{FieldTask, FieldTrial, field_units, run_field};
 use super::{FieldParams, FieldVariant};
 use crate::error::{Result, StudyError};
 use crate::report::Report;
@@ -28,13 +28,7 @@ pub fn run_world(
     index: usize,
     progress: &dyn Progress,
 ) -> Result<FieldWorld> {
-    config.validate()?;
-    if index >= config.worlds {
-        return Err(StudyError::InvalidParameter(format!(
-            "world {index} of a field experiment of {} worlds",
-            config.worlds
-        )));
-    }
+    check_world(config, index)?;
     let params = FieldParams {
         seed: config.seed + index as u64,
         ..config.clone()
@@ -58,6 +52,17 @@ pub fn run_world(
         drive: field.drive.clone(),
         trials,
     })
+}
+
+fn check_world(config: &FieldParams, index: usize) -> Result<()> {
+    config.validate()?;
+    if index >= config.worlds {
+        return Err(StudyError::InvalidParameter(format!(
+            "world {index} of a field experiment of {} worlds",
+            config.worlds
+        )));
+    }
+    Ok(())
 }
 
 /// Merges worlds given in any order (each exactly once) into the experiment's output.
@@ -126,6 +131,11 @@ impl Study for FieldExperiment {
     fn shards(config: &FieldParams) -> Result<usize> {
         config.validate()?;
         Ok(config.worlds)
+    }
+    /// [`field_units`] of every variant.
+    fn shard_units(config: &FieldParams, index: usize) -> Result<usize> {
+        check_world(config, index)?;
+        Ok(field_units(config, &FieldVariant::ALL))
     }
     fn run_shard(
         config: &FieldParams,

@@ -65,8 +65,8 @@ pub use summary::{
     restricted_plans, summarise,
 };
 pub use trials::{
-    FieldResult, FieldTask, FieldTrial, TaskDraws, bound_checks, field_graph, nav_config,
-    run_field, run_trial, tasks,
+    FieldResult, FieldTask, FieldTrial, TaskDraws, bound_checks, field_graph, field_units,
+    nav_config, run_field, run_trial, tasks,
 };
 
 use serde::{Deserialize, Serialize};

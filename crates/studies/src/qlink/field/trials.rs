@@ -3,7 +3,7 @@
 
 use std::collections::{BTreeMap, BTreeSet};
 
-use qsr_core::progress::Progress;
+use qsr_core::progress::{FixedTotal, Progress, phase};
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
@@ -116,8 +116,13 @@ pub struct TaskDraws {
 ///
 /// # Errors
 /// [`QlinkError::EmptyMap`] when no mapped landmark is real; [`StudyError::InvalidParameter`]
-/// when 1000 draws per trial found too few pairs.
-pub fn tasks(field: &FieldMap, params: &FieldParams) -> Result<(Vec<FieldTask>, TaskDraws)> {
+/// when 1000 draws per trial found too few pairs; [`StudyError::Cancelled`] when `progress`
+/// asks (it ticks once per task kept).
+pub fn tasks(
+    field: &FieldMap,
+    params: &FieldParams,
+    progress: &dyn Progress,
+) -> Result<(Vec<FieldTask>, TaskDraws)> {
     let graph = LinkGraph::new(&field.map, params.beta, |_, _, _| 1.0)?;
     let mut draws = TaskDraws::default();
     let spec = field.scenario.world.spec();
@@ -139,6 +144,7 @@ pub fn tasks(field: &FieldMap, params: &FieldParams) -> Result<(Vec<FieldTask>, 
     let mut rng = ChaCha8Rng::seed_from_u64(params.seed ^ 0x0066_6965_6c64);
     let mut attempts = 0usize;
     while out.len() < params.trials {
+        progress.check()?;
         attempts += 1;
         if attempts > 1000 * params.trials {
             return Err(StudyError::InvalidParameter(
@@ -185,6 +191,7 @@ pub fn tasks(field: &FieldMap, params: &FieldParams) -> Result<(Vec<FieldTask>, 
             goal,
             goal_position,
         });
+        progress.tick();
     }
     Ok((out, draws))
 }
@@ -468,9 +475,9 @@ pub fn nav_config(
 }
 
 /// Maps the field and runs every variant's trials (in parallel; the result does not depend
-/// on the thread count). `progress` is told the number of trials once the tasks are drawn,
-/// ticks after each and is checked before the mapping drive, after it and before each trial
-/// (a cancelled run returns [`QlinkError::Cancelled`]).
+/// on the thread count). `progress` is told [`field_units`] before any work, ticks after the
+/// map, each task drawn and each trial, and is checked between them (a cancelled run returns
+/// [`StudyError::Cancelled`]).
 ///
 /// # Errors
 /// As [`map_field`], [`tasks`], [`field_graph`], [`run_trial`].
@@ -479,25 +486,36 @@ pub fn run_field(
     variants: &[FieldVariant],
     progress: &dyn Progress,
 ) -> Result<(FieldMap, TaskDraws, Vec<FieldTrial>)> {
+    progress.add_total(field_units(params, variants));
+    let progress = &FixedTotal(progress);
     progress.check()?;
-    let field = map_field(params)?;
-    progress.check()?;
-    let (tasks, draws) = tasks(&field, params)?;
-    progress.add_total(tasks.len() * variants.len());
+    let field = phase(progress, 1, |_| map_field(params))?;
+    let (tasks, draws) = phase(progress, params.trials, |p| tasks(&field, params, p))?;
     let mut all = Vec::new();
     for &v in variants {
-        let (graph, pomdps) = field_graph(&field, params, v)?;
-        let config = nav_config(&field, params, v, pomdps[0].clone());
-        let trials: Vec<FieldTrial> = tasks
-            .par_iter()
-            .map(|t| {
-                progress.check()?;
-                let r = run_trial(&field, &graph, &config, v, t);
-                progress.tick();
-                r
-            })
-            .collect::<Result<_>>()?;
+        let trials: Vec<FieldTrial> = phase(progress, tasks.len(), |p| {
+            let (graph, pomdps) = field_graph(&field, params, v)?;
+            let config = nav_config(&field, params, v, pomdps[0].clone());
+            tasks
+                .par_iter()
+                .map(|t| {
+                    p.check()?;
+                    let r = run_trial(&field, &graph, &config, v, t);
+                    p.tick();
+                    r
+                })
+                .collect::<Result<_>>()
+        })?;
         all.extend(trials);
     }
     Ok((field, draws, all))
+}
+
+/// The units of progress [`run_field`] ticks: the map, each task drawn, each variant's trials.
+#[must_use]
+pub fn field_units(params: &FieldParams, variants: &[FieldVariant]) -> usize {
+    params
+        .trials
+        .saturating_mul(1 + variants.len())
+        .saturating_add(1)
 }

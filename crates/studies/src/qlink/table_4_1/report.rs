@@ -9,7 +9,7 @@ use serde::{Deserialize, Serialize};
 
 use super::{
     ArcRadius, MAP_RANGE, SettingInfo, StudyConfig, TableRow, Trial, TrialRecord, WorldShard,
-    aggregate, matched_length, run_world, table, worlds,
+    aggregate, matched_length, run_world, table, world_units, worlds,
 };
 use crate::error::Result;
 use crate::report::{Cell, Claim, Column, Figure, Line, Plot, Report, Table, Verdict};
@@ -72,6 +72,10 @@ impl Study for Table41 {
     /// One shard per world ([`worlds`]): the sensor-range trial's, one per landmark size.
     fn shards(config: &StudyConfig) -> Result<usize> {
         Ok(worlds(&config.settings()?).len())
+    }
+    /// [`world_units`]: the map, each goal's distance field, each navigation.
+    fn shard_units(config: &StudyConfig, index: usize) -> Result<usize> {
+        world_units(config, index)
     }
     fn run_shard(
         config: &StudyConfig,
