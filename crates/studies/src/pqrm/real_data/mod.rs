@@ -292,7 +292,8 @@ impl Study for RealData {
     fn shards(c: &RealDataConfig) -> Result<usize> {
         Ok(1 + c.variants.len())
     }
-    /// The main run's phases ([`main_units`]); a variant maps every frame once.
+    /// The main run's phases (fitting τ, the maps, the robots, τ = 1 and the chosen τ); a
+    /// variant maps every frame once.
     fn shard_units(c: &RealDataConfig, index: usize) -> Result<usize> {
         check_index(c, index)?;
         let recording = recording::read(c)?;
