@@ -400,13 +400,14 @@ impl Calculus {
 
     /// The probe points behind derived structure (normalised coordinates).
     pub(crate) fn probes(&self) -> &[Point2<f64>] {
-        self.derived
-            .probes
-            .get_or_init(|| self.features.probes(DERIVED_PROBES, DERIVED_SEED))
+        crate::derived::get_or_derive(&self.derived.probes, || {
+            self.features.probes(DERIVED_PROBES, DERIVED_SEED)
+        })
+        .as_slice()
     }
 
     pub(crate) fn pools(&self) -> &[StatePool] {
-        self.derived.pools.get_or_init(|| {
+        crate::derived::get_or_derive(&self.derived.pools, || {
             state_pools(
                 &self.partition,
                 self.n_states(),
@@ -415,14 +416,13 @@ impl Calculus {
                 DERIVED_SEED ^ 0x9e37,
             )
         })
+        .as_slice()
     }
 
     /// The conceptual-neighbourhood graph (computed once, then cached).
     #[must_use]
     pub fn neighbours(&self) -> &NeighbourGraph {
-        self.derived
-            .neighbours
-            .get_or_init(|| NeighbourGraph::compute(self))
+        crate::derived::get_or_derive(&self.derived.neighbours, || NeighbourGraph::compute(self))
     }
 
     /// The table of a permutation operation (computed once, then cached).
@@ -431,8 +431,10 @@ impl Calculus {
     /// [`QsrError::Unsupported`] for calculi that are not ternary.
     pub fn permutation(&self, op: Permutation) -> Result<&PermutationTable> {
         self.require_ternary(op.name())?;
-        Ok(self.derived.permutations[op as usize]
-            .get_or_init(|| PermutationTable::compute(self, op, true)))
+        Ok(crate::derived::get_or_derive(
+            &self.derived.permutations[op as usize],
+            || PermutationTable::compute(self, op, true),
+        ))
     }
 
     /// Whether the sound composition and every permutation table are in memory.
@@ -469,10 +471,9 @@ impl Calculus {
     /// [`QsrError::Unsupported`] for calculi that are not ternary.
     pub fn compose_table(&self) -> Result<&ComposeTable> {
         self.require_ternary("compose")?;
-        Ok(self
-            .derived
-            .compose
-            .get_or_init(|| ComposeTable::compute(self, &ComposeOptions::default())))
+        Ok(crate::derived::get_or_derive(&self.derived.compose, || {
+            ComposeTable::compute(self, &ComposeOptions::default())
+        }))
     }
 
     /// The composition table with explicit sampling options (not cached).

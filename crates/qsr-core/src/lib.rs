@@ -69,6 +69,7 @@ mod builtin;
 mod calculus;
 mod compose;
 pub mod coverage;
+mod derived;
 mod describe;
 mod error;
 mod frame;

@@ -265,10 +265,9 @@ impl BinaryAlgebra {
             return Ok(ops);
         }
         let table = self.compose_table()?;
-        Ok(self
-            .inner
-            .ops
-            .get_or_init(|| SetOps::new(table, &self.inner.converse, &self.inner.weights)))
+        Ok(crate::derived::get_or_derive(&self.inner.ops, || {
+            SetOps::new(table, &self.inner.converse, &self.inner.weights)
+        }))
     }
 
     /// Checks the tables' algebra: converse an involution, the identity neutral, composition
@@ -305,10 +304,7 @@ impl AsBinaryAlgebra for BinaryAlgebra {
 
 impl AsBinaryAlgebra for BinaryCalculus {
     fn binary_algebra(&self) -> BinaryAlgebra {
-        self.derived
-            .algebra
-            .get_or_init(|| BinaryAlgebra::of(self))
-            .clone()
+        crate::derived::get_or_derive(&self.derived.algebra, || BinaryAlgebra::of(self)).clone()
     }
 }
 

@@ -421,9 +421,9 @@ impl BinaryCalculus {
     /// The converse table: `X r Y ⇒ Y conv(r) X` (derived on first use, then cached).
     #[must_use]
     pub fn converse(&self) -> &ConverseTable {
-        self.derived
-            .converse
-            .get_or_init(|| derive::derive_converse(&self.relations(), TICKS_PER_UNIT))
+        crate::derived::get_or_derive(&self.derived.converse, || {
+            derive::derive_converse(&self.relations(), TICKS_PER_UNIT)
+        })
     }
 
     /// The composition table `{A:B} ∘ {B:C} → {A:C}` (derived on first use, then cached).
@@ -436,10 +436,9 @@ impl BinaryCalculus {
             return Ok(t);
         }
         self.check_compose()?;
-        Ok(self
-            .derived
-            .compose
-            .get_or_init(|| derive::derive_compose(&self.relations(), TICKS_PER_UNIT)))
+        Ok(crate::derived::get_or_derive(&self.derived.compose, || {
+            derive::derive_compose(&self.relations(), TICKS_PER_UNIT)
+        }))
     }
 
     /// Derives the tables on a grid of `per_unit` ticks per unit (not cached): tests use it
@@ -474,10 +473,10 @@ impl BinaryCalculus {
                 ),
             });
         }
-        Ok(self
-            .derived
-            .neighbours
-            .get_or_init(|| derive::derive_neighbours(&self.relations(), TICKS_PER_UNIT)))
+        Ok(crate::derived::get_or_derive(
+            &self.derived.neighbours,
+            || derive::derive_neighbours(&self.relations(), TICKS_PER_UNIT),
+        ))
     }
 }
 
