@@ -6,9 +6,10 @@
 //!
 //! ## Why a crate of its own
 //! Logs are I/O with their own failure modes (a truncated chunk, a schema nobody can read, a
-//! topic that is not there) and their own dependencies (`mcap` with zstd/lz4 chunks, a CDR
-//! decoder for ROS 2 messages). Keeping them here lets the mapper stay free of them and lets
-//! the CLI, the Python wheel and the fuzz targets share one reader.
+//! topic that is not there) and their own dependencies (`mcap`, pure-Rust zstd/lz4 chunk
+//! decoders ([`decompress`]), a CDR decoder for ROS 2 messages). Keeping them here lets the
+//! mapper stay free of them and lets the CLI, the Python wheel and the fuzz targets share one
+//! reader.
 //!
 //! ## What is read
 //! | schema (encoding) | from | becomes |
@@ -61,6 +62,7 @@
 
 mod convert;
 pub mod decode;
+pub mod decompress;
 mod error;
 mod kind;
 mod read;

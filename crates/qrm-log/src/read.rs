@@ -237,6 +237,7 @@ fn check_plain_chunks(bytes: &[u8]) -> mcap::McapResult<()> {
             .with_record_length_limit(MAX_RECORD_BYTES)
             .with_emit_chunks(true),
     );
+    crate::decompress::register(&mut reader, MAX_RECORD_BYTES)?;
     let mut buf = bytes;
     while let Some(event) = reader.next_event() {
         match event {
@@ -352,14 +353,13 @@ struct Records<'a> {
 }
 
 impl<'a> Records<'a> {
-    fn new(buf: &'a [u8]) -> Self {
-        Self {
-            buf,
-            reader: mcap::sans_io::LinearReader::new_with_options(
-                mcap::sans_io::LinearReaderOptions::default()
-                    .with_record_length_limit(MAX_RECORD_BYTES),
-            ),
-        }
+    fn new(buf: &'a [u8]) -> mcap::McapResult<Self> {
+        let mut reader = mcap::sans_io::LinearReader::new_with_options(
+            mcap::sans_io::LinearReaderOptions::default()
+                .with_record_length_limit(MAX_RECORD_BYTES),
+        );
+        crate::decompress::register(&mut reader, MAX_RECORD_BYTES)?;
+        Ok(Self { buf, reader })
     }
 }
 
@@ -486,7 +486,13 @@ fn index_records(bytes: &[u8], path: &Path, options: &ReadOptions) -> Result<Ind
             })
         }
     };
-    for record in Records::new(bytes) {
+    let records = Records::new(bytes).map_err(|source| LogError::Damaged {
+        path: path.to_path_buf(),
+        messages: 0,
+        present: present(&channels),
+        source,
+    })?;
+    for record in records {
         let record = match record {
             Ok(r) => r,
             Err(source) => {
