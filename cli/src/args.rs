@@ -47,6 +47,48 @@ pub enum Command {
     /// Qualitative reasoning over constraint networks: algebraic closure, scenarios.
     #[command(subcommand)]
     Reason(crate::reason_cmd::ReasonCmd),
+    /// Every numeric flag of every command, one `COMMAND<TAB>--FLAG<TAB>TYPE` line each: what
+    /// the flag walker (`cli/tests/flags_walk.rs`) feeds extreme values, so a flag added
+    /// tomorrow is walked without anyone listing it.
+    #[command(hide = true, name = "numeric-flags")]
+    NumericFlags,
+}
+
+/// `(command path, --flag, type)` of every flag whose value is a number, found by walking
+/// clap's command tree (the value parser's type, not the flag's name, decides).
+pub fn numeric_flags() -> Vec<(String, String, &'static str)> {
+    use std::any::TypeId;
+    fn kind(arg: &clap::Arg) -> Option<&'static str> {
+        let t = arg.get_value_parser().type_id();
+        [
+            (TypeId::of::<f64>(), "f64"),
+            (TypeId::of::<f32>(), "f32"),
+            (TypeId::of::<u64>(), "u64"),
+            (TypeId::of::<u32>(), "u32"),
+            (TypeId::of::<usize>(), "usize"),
+        ]
+        .into_iter()
+        .find(|(id, _)| t == *id)
+        .map(|(_, name)| name)
+    }
+    fn walk(cmd: &clap::Command, path: &str, out: &mut Vec<(String, String, &'static str)>) {
+        for arg in cmd.get_arguments() {
+            if let (Some(long), Some(k)) = (arg.get_long(), kind(arg)) {
+                out.push((path.to_owned(), format!("--{long}"), k));
+            }
+        }
+        for sub in cmd.get_subcommands() {
+            let p = if path.is_empty() {
+                sub.get_name().to_owned()
+            } else {
+                format!("{path} {}", sub.get_name())
+            };
+            walk(sub, &p, out);
+        }
+    }
+    let mut out = Vec::new();
+    walk(&<Cli as clap::CommandFactory>::command(), "", &mut out);
+    out
 }
 
 /// A recording with ground truth (`qrm pqrm real --dataset`).

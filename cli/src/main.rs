@@ -54,6 +54,9 @@ fn main() -> ExitCode {
         args::Command::Demo(a) => demo_cmd::run(a),
         args::Command::Reason(cmd) => reason_cmd::run(cmd),
         args::Command::Study(cmd) => study_cmd::run(cmd),
+        args::Command::NumericFlags => args::numeric_flags()
+            .into_iter()
+            .try_for_each(|(cmd, flag, kind)| outln!("{cmd}\t{flag}\t{kind}").map_err(Into::into)),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

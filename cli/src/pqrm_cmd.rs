@@ -40,10 +40,8 @@ fn prob(calculus: &str, samples: usize, seed: u64, floor: f64) -> Result<()> {
     let calc =
         Calculus::resolve(calculus).with_context(|| format!("loading calculus `{calculus}`"))?;
     ensure!(samples >= 1, "--samples must be >= 1");
-    ensure!(
-        floor.is_finite() && floor >= 0.0,
-        "--floor must be finite and >= 0"
-    );
+    // The map's own bound (issue 39: `--floor 1e308` printed probabilities that were all 0).
+    pqrm::config::check_floor(floor).context("--floor")?;
     let mut out = String::new();
     // Capped like every input file: an endless line (`< /dev/zero`) ends instead of growing.
     let capped = std::io::stdin()
@@ -115,6 +113,7 @@ fn map_job(a: &MapArgs) -> Result<MapJob> {
         temper: 1.0,
     };
     config.validate()?;
+    a.noise.request().validate()?;
     let mut log = qrm_log::ReadOptions {
         topics: a.topic.clone(),
         range_max: a.range_max,

@@ -277,10 +277,12 @@ fn surfaces() -> Vec<Surface> {
 }
 
 /// The classes of bad input, each a transformation of a valid input.
-const CLASSES: [&str; 9] = [
+const CLASSES: [&str; 11] = [
     "NaN",
     "infinity",
     "1e308",
+    "1e12",
+    "1e-12",
     "negative (-1)",
     "empty",
     "truncated",
@@ -322,6 +324,8 @@ fn apply(class: &str, seed: &[u8]) -> Vec<u8> {
             "NaN" => replace(b"NaN"),
             "infinity" => replace(b"inf"),
             "1e308" => replace(b"1e308"),
+            "1e12" => replace(b"1e12"),
+            "1e-12" => replace(b"1e-12"),
             "negative (-1)" => replace(b"-1"),
             "empty" => Vec::new(),
             "truncated" => seed[..seed.len() / 2].to_vec(),
@@ -340,6 +344,8 @@ fn apply(class: &str, seed: &[u8]) -> Vec<u8> {
         "NaN" => replace("NaN"),
         "infinity" => replace("inf"),
         "1e308" => replace("1e308"),
+        "1e12" => replace("1e12"),
+        "1e-12" => replace("1e-12"),
         "negative (-1)" => replace("-1"),
         "empty" => Vec::new(),
         "truncated" => seed.as_bytes()[..seed.len() / 2].to_vec(),
@@ -458,7 +464,8 @@ fn every_surface_meets_every_bad_input_with_a_typed_error_or_a_clean_result() {
          Produced by `cli/tests/reliability_table.rs` (regenerate: `QRM_BLESS=1 cargo test -p \
          qrm-cli --test reliability_table`); the test fails when the binary does anything else. \
          Each cell is one run of the real `qrm` binary on a valid input (from `fuzz/corpus/`) \
-         spoiled one way: the last number replaced by NaN, `inf`, `1e308` or `-1`; the file \
+         spoiled one way: the last number replaced by NaN, `inf`, `1e308`, `1e12`, `1e-12` or \
+         `-1`; the file \
          empty, cut in half, replaced by prose, given a 2 MB number, or binary bytes. \
          *accepted* means exit 0 with no NaN or infinity in the output (a large but finite \
          value can be legitimate); *error* is exit 1 with the message shown (first 110 \

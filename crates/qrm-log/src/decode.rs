@@ -221,14 +221,38 @@ fn ros2_scan(
         f64::from(m.header.stamp.nanosec),
         "header.stamp",
     )?;
+    let (range_min, range_max) = limits((min, max), (m.range_min, m.range_max))?;
     check_scan(RangeScan {
         t,
         angle_min: m.angle_min,
         angle_increment: m.angle_increment,
-        range_min: min.unwrap_or(m.range_min),
-        range_max: max.unwrap_or(m.range_max),
+        range_min,
+        range_max,
         ranges: m.ranges,
     })
+}
+
+/// The range limits a scan is read with: the reader's overrides (`--range-max`) where given,
+/// else the message's. An override that leaves no interval is blamed, not the message (issue
+/// 39: `--range-max 0` was reported as the message's `range_min` being wrong).
+fn limits(
+    (min, max): (Option<f32>, Option<f32>),
+    (message_min, message_max): (f32, f32),
+) -> Result<(f32, f32), FieldError> {
+    let (lo, hi) = (min.unwrap_or(message_min), max.unwrap_or(message_max));
+    if max.is_some() && lo > hi {
+        return Err(bad(
+            "range_max",
+            format!("the --range-max given ({hi} m) is below the scan's range_min ({lo} m)"),
+        ));
+    }
+    if min.is_some() && lo > hi {
+        return Err(bad(
+            "range_min",
+            format!("the range_min given ({lo} m) is above the scan's range_max ({hi} m)"),
+        ));
+    }
+    Ok((lo, hi))
 }
 
 fn json(bytes: &[u8]) -> Result<Value, FieldError> {
@@ -301,12 +325,13 @@ fn foxglove_scan(
     } else {
         0.0
     };
+    let (range_min, range_max) = limits((min, max), (0.0, f32::INFINITY))?;
     check_scan(RangeScan {
         t,
         angle_min: start as f32,
         angle_increment: increment as f32,
-        range_min: min.unwrap_or(0.0),
-        range_max: max.unwrap_or(f32::INFINITY),
+        range_min,
+        range_max,
         ranges,
     })
 }

@@ -118,14 +118,20 @@ impl ReadOptions {
                 )));
             }
         }
-        for (name, v) in [("range_min", self.range_min), ("range_max", self.range_max)] {
-            if let Some(v) = v
-                && !(v.is_finite() && v >= 0.0)
-            {
-                return Err(LogError::Invalid(format!(
-                    "{name} {v} must be finite and >= 0"
-                )));
-            }
+        if let Some(v) = self.range_min
+            && !(v.is_finite() && v >= 0.0)
+        {
+            return Err(LogError::Invalid(format!(
+                "range_min {v} must be finite and >= 0"
+            )));
+        }
+        // A cap of 0 m makes every return "no return": an empty map, not a reading.
+        if let Some(v) = self.range_max
+            && !(v.is_finite() && v > 0.0)
+        {
+            return Err(LogError::Invalid(format!(
+                "range_max (--range-max) {v} must be finite and > 0"
+            )));
         }
         Ok(())
     }

@@ -324,7 +324,7 @@ impl<'a> Serge<'a> {
         let k = self.beliefs.len();
         if !params.sigma.is_finite() || params.sigma < 0.0 {
             return Err(SergeError::InvalidParameter(format!(
-                "σ = {} must be finite and ≥ 0",
+                "sigma (σ) = {} must be finite and ≥ 0",
                 params.sigma
             )));
         }

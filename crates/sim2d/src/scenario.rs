@@ -360,9 +360,19 @@ impl Scenario {
     /// # Errors
     /// [`SimError::Invalid`] for a non-positive radius or one that makes landmarks overlap.
     pub fn with_landmark_radius(self, radius: f64) -> Result<Self> {
-        check(radius.is_finite() && radius > 0.0, || {
-            format!("landmark radius {radius} must be finite and > 0")
-        })?;
+        // Named as the field (`landmark_radius`, the CLI's `--landmark-radius`), so the
+        // refusal blames the setting, not landmark 0 of the world (issue 39).
+        let smallest = crate::world::MIN_WORLD_SIZE / 100.0;
+        check(
+            radius.is_finite() && (smallest..=crate::world::MAX_WORLD_EXTENT).contains(&radius),
+            || {
+                format!(
+                    "landmark_radius = {radius} m must be finite, at least {smallest} m and at \
+                     most {:e} m",
+                    crate::world::MAX_WORLD_EXTENT
+                )
+            },
+        )?;
         let mut spec = self.world.spec().clone();
         spec.landmarks.iter_mut().for_each(|l| l.radius = radius);
         for (i, a) in spec.landmarks.iter().enumerate() {
@@ -371,7 +381,7 @@ impl Scenario {
                     (a.pos[0] - b.pos[0]).hypot(a.pos[1] - b.pos[1]) > 2.0 * radius,
                     || {
                         format!(
-                            "with radius {radius} landmarks {} and {} overlap",
+                            "landmark_radius = {radius} m makes landmarks {} and {} overlap",
                             a.id, b.id
                         )
                     },

@@ -58,6 +58,28 @@ pub struct WorldSpec {
     pub clutter: Vec<Clutter>,
 }
 
+impl WorldSpec {
+    /// Parses a TOML world file (not yet validated: [`World::new`] does that).
+    ///
+    /// # Errors
+    /// [`SimError::World`] led by the field's path (`wall[0].id: invalid value: integer -1,
+    /// expected u32`): a TOML error alone shows the line but not which entity it belongs to
+    /// (issue 39).
+    pub fn from_toml(text: &str) -> Result<Self> {
+        let de = toml::Deserializer::parse(text).map_err(|e| SimError::World(e.to_string()))?;
+        serde_path_to_error::deserialize(de).map_err(|e| {
+            let path = e.path().to_string();
+            let why = e.into_inner();
+            // `.` is the whole file: no field to name
+            SimError::World(if path == "." {
+                why.to_string()
+            } else {
+                format!("{path}: {why}")
+            })
+        })
+    }
+}
+
 /// What a ray or a query hit.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
 pub enum Hit {
@@ -150,8 +172,7 @@ impl World {
     /// # Errors
     /// [`SimError::World`] for TOML errors, then as [`World::new`].
     pub fn from_toml(text: &str) -> Result<Self> {
-        let spec: WorldSpec = toml::from_str(text).map_err(|e| SimError::World(e.to_string()))?;
-        Self::new(spec)
+        Self::new(WorldSpec::from_toml(text)?)
     }
 
     /// The spec.

@@ -115,6 +115,24 @@ pub struct ResolvedNoise {
 }
 
 impl NoiseRequest {
+    /// Checks the σs given, whatever the recording's form: a σ for a recording that carries
+    /// its own covariances goes unused, but 1e308 is still a wrong flag (issue 39).
+    ///
+    /// # Errors
+    /// [`StudyError::InvalidParameter`] naming `sigma_range` or `sigma_bearing`.
+    pub fn validate(&self) -> Result<()> {
+        RangeBearingNoise {
+            sigma_range: self
+                .sigma_range
+                .unwrap_or(RangeBearingNoise::MRCLAM.sigma_range),
+            sigma_bearing: self
+                .sigma_bearing
+                .unwrap_or(RangeBearingNoise::MRCLAM.sigma_bearing),
+        }
+        .validate()?;
+        Ok(())
+    }
+
     /// The noise to read `input` (of form `format`) with. A fit nobody asked for that fails (a
     /// recording too short) keeps the fixed noise, and `warn` is told why; `mode: auto` asked
     /// for it, so there it is an error.
@@ -136,6 +154,7 @@ impl NoiseRequest {
                 .sigma_bearing
                 .unwrap_or(RangeBearingNoise::MRCLAM.sigma_bearing),
         };
+        self.validate()?;
         let given = self.sigma_range.is_some() || self.sigma_bearing.is_some();
         let fixed_only = ResolvedNoise {
             noise: fixed,

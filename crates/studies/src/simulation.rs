@@ -141,7 +141,10 @@ pub fn read_world(path: &Path) -> Result<WorldSpec> {
     let world = |e: String| sim2d::SimError::World(format!("{}: {e}", path.display()));
     let text = qsr_core::text_file::read_text(path, qsr_core::text_file::MAX_INPUT_BYTES)
         .map_err(|e| world(e.to_string()))?;
-    Ok(toml::from_str(&text).map_err(|e| world(e.to_string()))?)
+    Ok(WorldSpec::from_toml(&text).map_err(|e| match e {
+        sim2d::SimError::World(why) => world(why),
+        other => other,
+    })?)
 }
 
 /// A simulated run.

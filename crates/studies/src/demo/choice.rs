@@ -141,9 +141,19 @@ pub fn choose_run(
             run.tried = candidates;
             Ok(run)
         }
+        // The navigating robot's range is said: too short a one (`--nav-range 1e-12`) is
+        // the usual reason no pair has a plan (issue 39).
         None => Err(StudyError::InvalidParameter(match goal {
-            Some(g) => format!("goal: no pose of the mapping drive has a plan to landmark {g}"),
-            None => "no start/goal pair along the mapping drive has a plan".to_owned(),
+            Some(g) => format!(
+                "goal: no pose of the mapping drive has a plan to landmark {g} (navigating \
+                 with nav_range = {} m)",
+                s.perception.range()
+            ),
+            None => format!(
+                "no start/goal pair along the mapping drive has a plan (navigating with \
+                 nav_range = {} m)",
+                s.perception.range()
+            ),
         })),
     }
 }
