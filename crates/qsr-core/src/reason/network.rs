@@ -560,9 +560,12 @@ impl Network {
         mut names: Vec<String>,
         parsed: Vec<(String, Vec<String>, Vec<String>)>,
     ) -> crate::Result<Self> {
+        // A set beside the list: a linear `contains` per point made reading quadratic, and
+        // 100,000 points took 39 s before the size check could refuse them (issue 39).
+        let mut seen: std::collections::HashSet<String> = names.iter().cloned().collect();
         for (_, pts, _) in &parsed {
             for p in pts {
-                if !names.contains(p) {
+                if seen.insert(p.clone()) {
                     names.push(p.clone());
                 }
             }
