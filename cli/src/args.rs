@@ -161,9 +161,11 @@ pub struct RealArgs {
     /// Dataset kind (only `mrclam` has ground truth here).
     #[arg(long, value_enum, default_value_t = TruthDataset::Mrclam)]
     pub dataset: TruthDataset,
-    /// Dataset directory (default: ../shared/data/mrclam-dataset7).
+    /// Dataset directory (default: ../shared/data/mrclam-dataset7). Given again, each further
+    /// recording is mapped with the same settings and scored in `recordings.csv` (one row per
+    /// recording and calculus) with a reliability diagram each.
     #[arg(long)]
-    pub input: Option<PathBuf>,
+    pub input: Vec<PathBuf>,
     /// Samples per landmark per frame.
     #[arg(long, default_value_t = 1000)]
     pub samples: usize,
@@ -187,6 +189,13 @@ pub struct RealArgs {
     /// see `pqrm::temper`). The report compares τ = 1 with the chosen τ either way.
     #[arg(long, default_value = "1")]
     pub temper: String,
+    /// How the frames of one landmark set combine (`pqrm::evidence`): `shared` (the default:
+    /// frames share the true geometry and an error — landmark extent, mounting, a robot's bias
+    /// — as large as the noise of N = 4 independent frames, N chosen by leaving one MRCLAM
+    /// recording out; `shared:N` for another N, `shared:inf` for no shared offset) or
+    /// `independent`, the thesis's eq. 2.10 (probabilities overconfident on real recordings).
+    #[arg(long, default_value = "shared")]
+    pub evidence: String,
     /// Seed.
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
@@ -266,6 +275,13 @@ pub struct MapArgs {
     /// truth needed; the choice goes into summary.json).
     #[arg(long, default_value = "1")]
     pub temper: String,
+    /// How the frames of one landmark set combine (`pqrm::evidence`): `shared` (the default:
+    /// frames share the true geometry and an error — landmark extent, mounting, a robot's bias
+    /// — as large as the noise of N = 4 independent frames, N chosen by leaving one MRCLAM
+    /// recording out; `shared:N` for another N, `shared:inf` for no shared offset) or
+    /// `independent`, the thesis's eq. 2.10 (probabilities overconfident on real recordings).
+    #[arg(long, default_value = "shared")]
+    pub evidence: String,
     /// Map only these robots' scans (comma-separated robot numbers, e.g. `1,2`).
     #[arg(long, value_delimiter = ',')]
     pub robots: Vec<u32>,

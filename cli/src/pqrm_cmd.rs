@@ -145,6 +145,7 @@ fn map_job(a: &MapArgs) -> Result<MapJob> {
         config,
         orderings: a.orderings.into(),
         temper: TemperChoice::parse(&a.temper).context("--temper")?,
+        evidence: pqrm::EvidenceModel::parse(&a.evidence).context("--evidence")?,
         map_format: a.map_format.into(),
     })
 }
@@ -229,9 +230,12 @@ fn real(a: RealArgs) -> Result<()> {
     // surveyed.
     let TruthDataset::Mrclam = a.dataset;
     let mut config = RealDataConfig::full(a.seed);
-    if let Some(input) = a.input {
+    let mut inputs = a.input.into_iter();
+    if let Some(input) = inputs.next() {
         config.input = input;
     }
+    config.also = inputs.collect();
+    config.evidence = pqrm::EvidenceModel::parse(&a.evidence).context("--evidence")?;
     config.samples = a.samples;
     config.max_frames = a.max_frames;
     config.gate_sigmas = a.gate.then_some(RealDataConfig::GATE_SIGMAS);

@@ -885,3 +885,64 @@ fn large_recordings_record_canonical_orderings_and_say_so() {
     assert_eq!(s["n_sets"], 12 * 11 * 10);
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// `qrm pqrm real --input A --input B`: one `recordings.csv` row per recording and calculus,
+/// a reliability diagram each, the evidence model named in the report; a bad `--evidence`
+/// is refused by name before any work.
+#[test]
+fn the_real_data_study_scores_every_recording_given() {
+    let Some(seven) = mrclam() else {
+        eprintln!("SKIPPED: shared/data/mrclam-dataset7 not found");
+        return;
+    };
+    let two = seven.with_file_name("mrclam-dataset2");
+    if !two.is_dir() {
+        eprintln!("SKIPPED: shared/data/mrclam-dataset2 not found");
+        return;
+    }
+    let out = tmp("real-recordings");
+    let base = [
+        "pqrm",
+        "real",
+        "--input",
+        seven.to_str().unwrap(),
+        "--input",
+        two.to_str().unwrap(),
+        "--max-frames",
+        "60",
+        "--samples",
+        "40",
+        "--out",
+        out.to_str().unwrap(),
+    ];
+    let bad = qrm(&[&base[..], &["--evidence", "shared:-2"]].concat(), "");
+    assert!(!bad.status.success());
+    let err = String::from_utf8_lossy(&bad.stderr);
+    assert!(
+        err.contains("--evidence") && err.contains("shared:-2"),
+        "{err}"
+    );
+    assert!(
+        !out.join("report.md").exists() && !out.join("recordings.csv").exists(),
+        "nothing written for a refused flag"
+    );
+    ok(&[&base[..], &["--evidence", "shared:inf"]].concat(), "");
+    let csv = std::fs::read_to_string(out.join("recordings.csv")).unwrap();
+    assert_eq!(
+        csv.lines().count(),
+        1 + 2 * 6,
+        "two recordings × six calculi:\n{csv}"
+    );
+    assert!(csv.lines().any(|l| l.starts_with("mrclam-dataset7,edc,")));
+    assert!(csv.lines().any(|l| l.starts_with("mrclam-dataset2,edc,")));
+    for f in ["reliability_1.svg", "reliability_2.png"] {
+        assert!(out.join(f).exists(), "{f} missing");
+    }
+    let report = std::fs::read_to_string(out.join("report.md")).unwrap();
+    assert!(
+        report.contains("Evidence model: **shared error** worth inf"),
+        "report"
+    );
+    assert!(report.contains("Every recording: log loss below the smoothed vote's"));
+    std::fs::remove_dir_all(&out).ok();
+}

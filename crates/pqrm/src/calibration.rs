@@ -38,7 +38,27 @@ pub struct Calibration {
 }
 
 /// Bins with fewer triplets are shown but not judged (their accuracy is noise).
-pub const MIN_BIN: usize = 20;
+pub const MIN_BIN: usize = 30;
+
+/// A map is calibrated when its ECE is at most this …
+pub const CALIBRATED_ECE: f64 = 0.05;
+/// … and every bin of at least [`MIN_BIN`] triplets is within this of its accuracy.
+pub const CALIBRATED_GAP: f64 = 0.10;
+
+impl Calibration {
+    /// ECE ≤ [`CALIBRATED_ECE`] and every judged bin within [`CALIBRATED_GAP`]: what a
+    /// robot betting on P(ML) needs (an honest average and no badly-off band of beliefs).
+    #[must_use]
+    pub fn is_calibrated(&self) -> bool {
+        is_calibrated(self.ece, self.max_gap)
+    }
+}
+
+/// The test of [`Calibration::is_calibrated`] on its two figures.
+#[must_use]
+pub fn is_calibrated(ece: f64, max_gap: f64) -> bool {
+    ece <= CALIBRATED_ECE && max_gap <= CALIBRATED_GAP
+}
 
 /// The reliability diagram of `map` against `truth` (triplets with a true state).
 ///

@@ -23,6 +23,9 @@
 //! - **Tempering chosen from the data** ([`temper`]): eq. 2.10 counts correlated frames as
 //!   independent evidence; a tempering exponent τ, chosen by how well the map predicts
 //!   held-out blocks of frames, makes the map's confidence honest without ground truth.
+//! - **Shared error** ([`evidence`]): frames of one set that share an error prove less than
+//!   eq. 2.10 says; the shared-error model reads each set's stored sum with an exponent that
+//!   caps its evidence, so a real recording's probabilities are ones a robot can bet on.
 //! - **Determinism**: every landmark's samples are seeded by `(seed, step, id)`; results do not
 //!   depend on the thread count.
 //!
@@ -43,6 +46,7 @@ pub mod calibrate;
 pub mod calibration;
 pub mod config;
 pub mod error;
+pub mod evidence;
 pub mod likelihood;
 pub mod loaders;
 pub mod map;
@@ -59,6 +63,7 @@ pub mod study;
 pub mod temper;
 
 pub use error::{PqrmError, Result};
+pub use evidence::EvidenceModel;
 pub use likelihood::{LandmarkSet, Orderings};
 pub use map::{Pqrm, PqrmConfig, TripletBelief, UpdateReport};
 pub use metrics::{Baselines, GroundTruth, MapMetrics, evaluate, random_baselines};

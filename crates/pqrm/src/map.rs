@@ -13,6 +13,7 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use crate::error::{PqrmError, Result};
+use crate::evidence::EvidenceModel;
 use crate::likelihood::{LandmarkSet, Orderings, StepCounts, log_likelihood, step_counts};
 use crate::map_file::{self, MapFormat, MapHeader, MapParts, MapSource};
 use crate::observation::{LandmarkId, Scan};
@@ -93,6 +94,7 @@ pub struct Pqrm {
     config: PqrmConfig,
     store: BeliefStore,
     steps: u64,
+    evidence: EvidenceModel,
 }
 
 /// Sets whose posteriors are computed together between two writes into the store: enough
@@ -119,7 +121,25 @@ impl Pqrm {
             config,
             store,
             steps: 0,
+            evidence: EvidenceModel::Independent,
         })
+    }
+
+    /// The map read under another evidence model ([`crate::evidence`]): the stored sums of
+    /// eq. 2.10 are unchanged, so it can be switched at any time, back and forth.
+    ///
+    /// # Errors
+    /// [`PqrmError::InvalidConfig`] for a shared-error model out of range.
+    pub fn with_evidence(mut self, evidence: EvidenceModel) -> Result<Self> {
+        evidence.validate()?;
+        self.evidence = evidence;
+        Ok(self)
+    }
+
+    /// How the frames of a set combine into its belief (eq. 2.10 unless set).
+    #[must_use]
+    pub fn evidence(&self) -> EvidenceModel {
+        self.evidence
     }
 
     /// The calculus.
@@ -166,14 +186,19 @@ impl Pqrm {
     }
 
     fn belief_at(&self, slot: usize) -> TripletBelief {
-        let mut log_p: Vec<f64> = self.store.row(slot).iter().map(|&v| f64::from(v)).collect();
+        let updates = self.store.updates(slot);
+        // the row is eq. 2.10's sum; the evidence model reads it with its exponent
+        let tau = self.evidence.exponent(updates);
+        let mut log_p: Vec<f64> = self
+            .store
+            .row(slot)
+            .iter()
+            .map(|&v| tau * f64::from(v))
+            .collect();
         // stored as f32, normalised to f32's precision: renormalised in f64 so that a
         // belief handed out sums to one as closely as an f64 can
         normalise_in_place(&mut log_p);
-        TripletBelief {
-            log_p,
-            updates: self.store.updates(slot),
-        }
+        TripletBelief { log_p, updates }
     }
 
     /// Recorded sets and their beliefs, in set order.
@@ -371,15 +396,7 @@ impl Pqrm {
         let slots = self.store.sorted_slots();
         let total: f64 = slots
             .iter()
-            .map(|&slot| {
-                let p: Vec<f64> = self
-                    .store
-                    .row(slot)
-                    .iter()
-                    .map(|&l| f64::from(l).exp())
-                    .collect();
-                entropy(&p)
-            })
+            .map(|&slot| self.belief_at(slot).entropy())
             .sum();
         Some(total / slots.len() as f64)
     }
@@ -437,6 +454,7 @@ impl Pqrm {
                 calculus: self.calculus.spec().clone(),
                 config: self.config,
                 steps: self.steps,
+                evidence: self.evidence,
             },
             n_states: self.calculus.n_states(),
             rows: self
@@ -461,7 +479,8 @@ impl Pqrm {
     /// [`PqrmError::Format`] naming the first bad set; calculus errors for a bad spec.
     pub(crate) fn from_parts(parts: MapParts) -> Result<Self> {
         let calculus = Calculus::from_spec(parts.header.calculus)?;
-        let mut map = Self::new(calculus, parts.header.config)?;
+        let mut map =
+            Self::new(calculus, parts.header.config)?.with_evidence(parts.header.evidence)?;
         map.steps = parts.header.steps;
         let q = map.calculus.n_states();
         let n = parts.sets.len();

@@ -11,7 +11,7 @@
 //! | 16 | 8 | `n_sets` (u64) |
 //! | 24 | 4 | `n_states` (u32) |
 //! | 28 | 4 | reserved, 0 |
-//! | 32 | `header_len` | header: `{"calculus": spec, "config": …, "steps": …}` as JSON |
+//! | 32 | `header_len` | header: `{"calculus": spec, "config": …, "steps": …, "evidence": …}` as JSON |
 //! | … | 12 · `n_sets` | sets: three u32 landmark ids each, in set order |
 //! | … | 4 · `n_sets` | update counts (u32) |
 //! | … | 4 · `n_sets` · `n_states` | log-probabilities (f32), one row per set |
@@ -28,6 +28,8 @@
 //! error names the field.
 
 use std::path::Path;
+
+use crate::evidence::EvidenceModel;
 
 use serde::{Deserialize, Serialize, Serializer};
 
@@ -83,6 +85,9 @@ pub(crate) struct MapHeader {
     pub calculus: qsr_core::CalculusSpec,
     pub config: PqrmConfig,
     pub steps: u64,
+    /// How a belief is read from its row (files before it existed: eq. 2.10).
+    #[serde(default)]
+    pub evidence: EvidenceModel,
 }
 
 /// A map's contents in set order: the form both formats are written from and read into.
@@ -110,6 +115,8 @@ struct SavedMap {
     calculus: qsr_core::CalculusSpec,
     config: PqrmConfig,
     steps: u64,
+    #[serde(default)]
+    evidence: EvidenceModel,
     sets: Vec<SavedSet>,
 }
 
@@ -136,12 +143,13 @@ impl Serialize for JsonView<'_, '_> {
     fn serialize<S: Serializer>(&self, s: S) -> std::result::Result<S::Ok, S::Error> {
         use serde::ser::SerializeStruct;
         let p = self.0;
-        let mut st = s.serialize_struct("SavedMap", 6)?;
+        let mut st = s.serialize_struct("SavedMap", 7)?;
         st.serialize_field("format", "qrm-pqrm")?;
         st.serialize_field("version", &FORMAT_VERSION)?;
         st.serialize_field("calculus", &p.header.calculus)?;
         st.serialize_field("config", &p.header.config)?;
         st.serialize_field("steps", &p.header.steps)?;
+        st.serialize_field("evidence", &p.header.evidence)?;
         st.serialize_field("sets", &Sets(p))?;
         st.end()
     }
@@ -193,6 +201,7 @@ pub(crate) fn read_json(text: &str) -> Result<MapParts> {
             calculus: saved.calculus,
             config: saved.config,
             steps: saved.steps,
+            evidence: saved.evidence,
         },
         sets: saved.sets.iter().map(|s| s.set).collect(),
         updates: saved.sets.iter().map(|s| s.updates).collect(),

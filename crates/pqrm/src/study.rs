@@ -667,6 +667,15 @@ pub struct RealCalculusResult {
     pub majority: VoteMetrics,
     /// The map's reliability diagram.
     pub calibration: crate::calibration::Calibration,
+    /// The map's log loss against the truth: mean `−ln P(true state)` over scored triplets
+    /// (a probability below 1e-300 counts as 1e-300, so the score stays finite).
+    #[serde(default)]
+    pub log_loss: f64,
+    /// The smoothed vote's log loss over the same triplets: each triplet's histogram of
+    /// single-frame ML states with one pseudo-count per state. A map whose probabilities lose
+    /// to it says less than counting frames, however its bins look.
+    #[serde(default)]
+    pub vote_log_loss: f64,
     /// Random-guess baselines.
     pub random: Baselines,
 }
@@ -686,13 +695,14 @@ pub fn run_real(
         calculi,
         config,
         &vec![config.temper; calculi.len()],
+        crate::EvidenceModel::Independent,
         progress,
     )
 }
 
 /// As [`run_real`], each calculus's map tempered by its own exponent (`tempers`, one per
-/// calculus in order, e.g. chosen by [`crate::temper::fit_temper`]); `config.temper` is
-/// ignored. Tempering changes no maximum-likelihood state, so only the confidence scores
+/// calculus in order, e.g. chosen by [`crate::temper::fit_temper`]) and read under
+/// `evidence` ([`crate::evidence`]); `config.temper` is ignored. Tempering changes no maximum-likelihood state, so only the confidence scores
 /// (entropy, P(ML), calibration) depend on it.
 ///
 /// # Errors
@@ -703,6 +713,7 @@ pub fn run_real_tempered(
     calculi: &[String],
     config: PqrmConfig,
     tempers: &[f64],
+    evidence: crate::EvidenceModel,
     progress: &dyn Progress,
 ) -> Result<Vec<RealCalculusResult>> {
     crate::temper::check_count(tempers, calculi.len())?;
@@ -715,7 +726,9 @@ pub fn run_real_tempered(
         .calculi
         .iter()
         .zip(tempers)
-        .map(|(c, &temper)| Pqrm::new(c.clone(), PqrmConfig { temper, ..config }))
+        .map(|(c, &temper)| {
+            Pqrm::new(c.clone(), PqrmConfig { temper, ..config })?.with_evidence(evidence)
+        })
         .collect::<Result<Vec<_>>>()?;
     let n = family.calculi.len();
     // Per calculus and triplet: how many frames voted for each state, and the summed
@@ -831,10 +844,19 @@ fn real_result(
 ) -> Result<RealCalculusResult> {
     let calc = map.calculus();
     let (mut vn, mut vwrong, mut vdist) = (0usize, 0usize, 0u64);
+    let (mut scored, mut loss, mut vote_loss) = (0usize, 0.0, 0.0);
     for (set, (count, mass)) in votes {
         let Some(t) = truth.state(calc, set)? else {
             continue;
         };
+        if let Some(p) = map.belief(*set) {
+            let total: u32 = count.iter().sum();
+            scored += 1;
+            loss -= p[t.index()].max(1e-300).ln();
+            vote_loss -= ((f64::from(count[t.index()]) + 1.0)
+                / (f64::from(total) + count.len() as f64))
+                .ln();
+        }
         let best = (0..count.len())
             .max_by(|&a, &b| count[a].cmp(&count[b]).then(mass[a].total_cmp(&mass[b])))
             .unwrap_or(0);
@@ -844,7 +866,10 @@ fn real_result(
         vdist += u64::from(calc.neighbours().distance(s, t).unwrap_or(0));
     }
     let vnf = vn.max(1) as f64;
+    let snf = scored.max(1) as f64;
     Ok(RealCalculusResult {
+        log_loss: loss / snf,
+        vote_log_loss: vote_loss / snf,
         calculus: calc.name().to_owned(),
         majority: VoteMetrics {
             n: vn,

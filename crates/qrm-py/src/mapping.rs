@@ -71,10 +71,12 @@ pub(crate) struct Pqrm {
 impl Pqrm {
     /// An empty map over `calculus`.
     /// `sensor` is "gaussian", "student-t:NU" or "outliers:RATE,SPREAD"; `temper` ∈ (0, 1]
-    /// scales each step's log-likelihood.
+    /// scales each step's log-likelihood; `evidence` is "shared" (frames share the geometry
+    /// and an error, `pqrm::evidence`: probabilities calibrated on real recordings),
+    /// "shared:N" or "independent" (the thesis's eq. 2.10).
     #[new]
     #[allow(clippy::too_many_arguments)] // the constructor's keyword arguments, and the token
-    #[pyo3(signature = (calculus, *, samples = 1000, floor = 1.0, orderings = "all", seed = 0, sensor = "gaussian", temper = 1.0))]
+    #[pyo3(signature = (calculus, *, samples = 1000, floor = 1.0, orderings = "all", seed = 0, sensor = "gaussian", temper = 1.0, evidence = "shared"))]
     fn new(
         py: Python<'_>,
         calculus: &Calculus,
@@ -84,7 +86,9 @@ impl Pqrm {
         seed: u64,
         sensor: &str,
         temper: f64,
+        evidence: &str,
     ) -> PyResult<Self> {
+        let evidence = pqrm::EvidenceModel::parse(evidence).map_err(perr)?;
         let orderings = match orderings {
             "all" => Orderings::All,
             "canonical" => Orderings::Canonical,
@@ -103,9 +107,17 @@ impl Pqrm {
             temper,
         };
         let calculus = calculus.inner.clone();
-        crate::pool::detach(py, || pqrm::Pqrm::new(calculus, config))
-            .map(|inner| Self { inner })
-            .map_err(perr)
+        crate::pool::detach(py, || {
+            pqrm::Pqrm::new(calculus, config).and_then(|m| m.with_evidence(evidence))
+        })
+        .map(|inner| Self { inner })
+        .map_err(perr)
+    }
+
+    /// How a set's frames combine into its belief: "shared:N" or "independent".
+    #[getter]
+    fn evidence(&self) -> String {
+        self.inner.evidence().to_string()
     }
 
     /// One time step: landmark `ids` (n,), positions `xy` (n, 2) and covariances `cov`

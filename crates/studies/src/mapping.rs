@@ -155,6 +155,8 @@ pub struct MapJob {
     pub orderings: OrderingsChoice,
     /// τ, or `auto`.
     pub temper: TemperChoice,
+    /// How a set's frames combine into its belief (`shared` by default on recordings).
+    pub evidence: pqrm::EvidenceModel,
     /// The map file's format.
     pub map_format: MapFormatChoice,
 }
@@ -339,7 +341,7 @@ impl MapJob {
             ..self.config
         };
         let (config, temper_fit) = self.temper(data, config, progress)?;
-        let mut map = Pqrm::new(self.calculus.clone(), config)?;
+        let mut map = Pqrm::new(self.calculus.clone(), config)?.with_evidence(self.evidence)?;
         let start = Instant::now();
         progress.add_total(data.scans.len());
         for scan in &data.scans {
@@ -358,6 +360,7 @@ impl MapJob {
         put("floor", json!(config.floor));
         put("sensor", json!(config.sensor));
         put("temper", json!(config.temper));
+        put("evidence", json!(map.evidence()));
         put("samples", json!(config.samples));
         put("orderings", json!(config.orderings));
         put("skipped_measurements", json!(data.skipped));

@@ -194,7 +194,10 @@ class Pqrm:
         seed: int = 0,
         sensor: str = "gaussian",
         temper: float = 1.0,
+        evidence: str = "shared",
     ) -> Pqrm: ...
+    @property
+    def evidence(self) -> str: ...
     def update(
         self,
         t: float,

@@ -133,7 +133,7 @@ fn setup(r: &MonteCarloResult) -> String {
     // `r.config` holds the completed levels (the detail σ added): the trials actually run
     let levels = c.sigmas.len();
     format!(
-        "Set-up (DESIGN §4): {} landmarks uniform in {} m × {} m, a loop of radius {} m, a measurement every {}°, range {} m; σ_R ∈ {:?} m (σ_E = {:.2} m; the detail levels {:?} m included), {} trials per level: {} trials in all; s = {} samples, floor {} pseudo-counts.",
+        "Set-up (DESIGN §4): {} landmarks uniform in {} m × {} m, a loop of radius {} m, a measurement every {}°, range {} m; σ_R ∈ {:?} m (σ_E = {:.2} m; the detail levels {:?} m included), {} trials per level: {} trials in all; s = {} samples, floor {} pseudo-counts. Evidence model: independent frames, the thesis's eq. 2.10 (qrm's recordings default to the shared-error model, `pqrm::evidence`).",
         c.landmarks,
         c.world,
         c.world,

@@ -9,21 +9,24 @@
 //!
 //! **Shards.** Shard 0 is the main run: τ chosen from the recording, the six maps, the maps
 //! at τ = 1 and at the chosen τ, and the robots alone, pooled and merged (they use the main
-//! run's τ). Shard `1 + i` maps the recording under sensor variant `i`. Each shard reads the
-//! recording itself ([`recording::read`]), so the config's `input` must be readable where the
+//! run's τ). Shard `1 + i` maps the recording under sensor variant `i`; after them, one shard
+//! per recording in `also`, scored with the main settings ([`recordings`]). Each shard reads
+//! the recording itself ([`recording::read`]), so the config's `input` must be readable where the
 //! shard runs.
 
 pub mod recording;
+pub mod recordings;
 mod report;
+mod tempering;
 
 use std::path::PathBuf;
 
-use pqrm::PqrmConfig;
 use pqrm::loaders::{Dataset, RangeBearingNoise};
 use pqrm::robots::{RobotComparison, compare_robots};
 use pqrm::sensor::SensorModel;
 use pqrm::study::{RealCalculusResult, SensorVariant, run_real_tempered, sensor_sweep};
 use pqrm::temper::{TemperChoice, TemperFit, TemperOptions, fit_temper};
+use pqrm::{EvidenceModel, PqrmConfig};
 use qsr_core::Calculus;
 use qsr_core::progress::{Progress, phase};
 use serde::{Deserialize, Serialize};
@@ -84,8 +87,17 @@ pub struct RealDataConfig {
     /// one τ per calculus chosen from the recording. The report compares τ = 1 with the
     /// chosen τ either way.
     pub temper: TemperChoice,
-    /// The sensor models and temperings the report compares, one shard each.
+    /// The sensor models and temperings the report compares, one shard each (read as
+    /// independent frames, eq. 2.10).
     pub variants: Vec<Variant>,
+    /// How the main run's maps read a set's frames (`pqrm::evidence`): `"shared:N"` (the
+    /// default, N chosen by leaving one recording out) or `"independent"` (eq. 2.10).
+    #[serde(default = "EvidenceModel::shared_default")]
+    pub evidence: EvidenceModel,
+    /// Other recordings scored with the main settings, one row per recording and calculus in
+    /// `recordings.csv` (MRCLAM directories).
+    #[serde(default)]
+    pub also: Vec<PathBuf>,
     /// Seed of the sampler.
     pub seed: u64,
 }
@@ -114,6 +126,8 @@ impl RealDataConfig {
             sensor: SensorModel::Gaussian,
             temper: TemperChoice::Fixed(1.0),
             variants: standard_variants(),
+            evidence: EvidenceModel::shared_default(),
+            also: Vec::new(),
             seed,
         }
     }
@@ -159,7 +173,7 @@ impl RealDataConfig {
     }
 
     /// The mapper's settings of the main run (τ set per calculus later).
-    fn pqrm_config(&self) -> PqrmConfig {
+    pub(crate) fn pqrm_config(&self) -> PqrmConfig {
         PqrmConfig {
             samples: self.samples,
             seed: self.seed,
@@ -215,6 +229,11 @@ pub enum RealDataShard {
         /// The rows.
         rows: Vec<SensorVariant>,
     },
+    /// Shard `1 + variants + j`: recording `also[j]`, one row per calculus.
+    Recording {
+        /// The rows.
+        rows: Vec<recordings::RecordingRow>,
+    },
 }
 
 /// A run: the main run and the sensor variants.
@@ -225,6 +244,9 @@ pub struct RealDataOutput {
     pub main: MainRun,
     /// Every variant's rows, in the config's order.
     pub sensor_models: Vec<SensorVariant>,
+    /// Each recording of `also`, in order: one row per calculus.
+    #[serde(default)]
+    pub recordings: Vec<Vec<recordings::RecordingRow>>,
 }
 
 /// The study of thesis §2.3.2 on a surveyed recording.
@@ -277,6 +299,7 @@ impl Study for RealData {
             return bad("max_frames = 0: no frame to map".into());
         }
         c.pqrm_config().validate()?;
+        c.evidence.validate()?;
         for (i, v) in c.variants.iter().enumerate() {
             PqrmConfig {
                 sensor: v.sensor,
@@ -288,14 +311,21 @@ impl Study for RealData {
         }
         Ok(())
     }
-    /// The main run and one shard per sensor variant.
+    /// The main run, one shard per sensor variant, one per other recording.
     fn shards(c: &RealDataConfig) -> Result<usize> {
-        Ok(1 + c.variants.len())
+        Ok(1 + c.variants.len() + c.also.len())
     }
     /// The main run's phases (fitting τ, the maps, the robots, τ = 1 and the chosen τ); a
     /// variant maps every frame once.
     fn shard_units(c: &RealDataConfig, index: usize) -> Result<usize> {
         check_index(c, index)?;
+        if let Some(input) = index.checked_sub(1 + c.variants.len()).map(|j| &c.also[j]) {
+            let other = recording::read(&RealDataConfig {
+                input: input.clone(),
+                ..c.clone()
+            })?;
+            return Ok(recordings::units(c, other.data.scans.len()));
+        }
         let recording = recording::read(c)?;
         Ok(if index == 0 {
             main_units(c, &recording.data).iter().sum()
@@ -309,6 +339,10 @@ impl Study for RealData {
         progress: &dyn Progress,
     ) -> Result<RealDataShard> {
         check_index(c, index)?;
+        if let Some(input) = index.checked_sub(1 + c.variants.len()).map(|j| &c.also[j]) {
+            let rows = recordings::score_recording(c, input, progress)?;
+            return Ok(RealDataShard::Recording { rows });
+        }
         let recording = recording::read(c)?;
         if index == 0 {
             return Ok(RealDataShard::Main(Box::new(main_run(
@@ -337,13 +371,20 @@ impl Study for RealData {
         shards.sort_by_key(|s| s.0);
         let mut main = None;
         let mut sensor_models = Vec::new();
+        let mut others = Vec::new();
+        let first_recording = 1 + c.variants.len();
         for (i, s) in shards {
             match (i, s) {
                 (0, RealDataShard::Main(m)) => main = Some(*m),
-                (i, RealDataShard::Variant { rows }) if i > 0 => sensor_models.extend(rows),
+                (i, RealDataShard::Variant { rows }) if i > 0 && i < first_recording => {
+                    sensor_models.extend(rows);
+                }
+                (i, RealDataShard::Recording { rows }) if i >= first_recording => {
+                    others.push(rows);
+                }
                 (i, _) => {
                     return Err(StudyError::InvalidParameter(format!(
-                        "shard {i} holds the other part (shard 0 is the main run, the others variants)"
+                        "shard {i} holds another part (shard 0 is the main run, then the variants, then the other recordings)"
                     )));
                 }
             }
@@ -352,6 +393,7 @@ impl Study for RealData {
         Ok(RealDataOutput {
             main,
             sensor_models,
+            recordings: others,
         })
     }
     fn report(c: &RealDataConfig, output: &RealDataOutput) -> Report {
@@ -408,7 +450,7 @@ fn main_run(c: &RealDataConfig, rec: Recording, progress: &dyn Progress) -> Resu
         }
     };
     let results = phase(progress, main_units, |p| {
-        run_real_tempered(data, &c.calculi, config, &tempers, p)
+        run_real_tempered(data, &c.calculi, config, &tempers, c.evidence, p)
     })?;
     let robots = phase(progress, robot_units, |p| {
         if robot_units > 0 {
@@ -425,7 +467,9 @@ fn main_run(c: &RealDataConfig, rec: Recording, progress: &dyn Progress) -> Resu
             if ts == tempers.as_slice() {
                 Ok(results.clone())
             } else {
-                Ok(run_real_tempered(data, &c.calculi, config, ts, p)?)
+                Ok(run_real_tempered(
+                    data, &c.calculi, config, ts, c.evidence, p,
+                )?)
             }
         };
         let untempered = at(&vec![1.0; c.calculi.len()])?;

@@ -3,12 +3,15 @@
 //! sensor models and many robots; the CSV and JSON files of the old `qrm pqrm real` keep
 //! their names and contents.
 
-use pqrm::calibration::MIN_BIN;
+use pqrm::calibration::{CALIBRATED_ECE, CALIBRATED_GAP, MIN_BIN};
 use pqrm::robots::RobotComparison;
-use pqrm::study::{RealCalculusResult, SensorVariant};
+use pqrm::study::RealCalculusResult;
 use serde_json::json;
 
-use super::{RealDataConfig, RealDataOutput, Tempering};
+use super::tempering::{
+    sensor_models_table, temper_csv, temper_figure, temper_json, tempering_table,
+};
+use super::{RealDataConfig, RealDataOutput};
 use crate::report::{Attachment, Cell, Claim, Column, Figure, Line, Plot, Report, Table, Verdict};
 
 /// The thesis's New College maps (EDC, §2.3.2, Figs 2.14–2.15): mean entropy and mean
@@ -19,13 +22,9 @@ pub const THESIS_NEW_COLLEGE: [(&str, f64, f64); 3] = [
     ("Monocular", 1.7, 1.3),
 ];
 
-/// A map is called calibrated when every well-filled P(ML) bin is within this of its
-/// accuracy.
-pub const CALIBRATED_GAP: f64 = 0.05;
-
 /// The report of a run.
 #[must_use]
-pub fn report(_config: &RealDataConfig, out: &RealDataOutput) -> Report {
+pub fn report(config: &RealDataConfig, out: &RealDataOutput) -> Report {
     let m = &out.main;
     let mut tables = vec![
         maps_table(&m.results),
@@ -41,6 +40,8 @@ pub fn report(_config: &RealDataConfig, out: &RealDataOutput) -> Report {
         attachments.push(temper_json(t));
     }
     tables.push(sensor_models_table(&out.sensor_models));
+    let recording_rows = super::recordings::rows(out);
+    tables.push(super::recordings::table(&recording_rows));
     if !m.robots.is_empty() {
         tables.push(many_robots_table(&m.robots));
         tables.push(robots_csv(&m.robots));
@@ -54,19 +55,28 @@ pub fn report(_config: &RealDataConfig, out: &RealDataOutput) -> Report {
             "PQRM on {} (the analogue of thesis §2.3.2)",
             m.recording.title
         ),
-        setup: setup(out),
+        setup: setup(config, out),
         tables,
-        claims: claims(&m.results),
-        figures: figures(out),
+        claims: claims(&m.results)
+            .into_iter()
+            .chain(super::recordings::claims(&recording_rows))
+            .collect(),
+        figures: figures(out)
+            .into_iter()
+            .chain(super::recordings::figures(&recording_rows))
+            .collect(),
         notes: notes(out),
         attachments,
     }
 }
 
-fn setup(out: &RealDataOutput) -> String {
+fn setup(config: &RealDataConfig, out: &RealDataOutput) -> String {
     let r = &out.main.recording;
     let check = &r.noise_check;
-    let mut s = String::new();
+    let mut s = format!(
+        "{}\n\n",
+        super::recordings::evidence_sentence(config.evidence)
+    );
     for sus in &check.suspects {
         s.push_str(&format!(
             "**Warning: the survey of landmark {} disagrees with the measurements** (median |z| {:.1} over {} pairs, the recording's median {:.2}): \
@@ -185,7 +195,7 @@ fn beside_thesis_table(results: &[RealCalculusResult]) -> Table {
     t
 }
 
-fn yes_no(yes: bool) -> Cell {
+pub(super) fn yes_no(yes: bool) -> Cell {
     Cell::text(if yes { "yes" } else { "**no**" })
 }
 
@@ -203,9 +213,16 @@ fn calibration_table(results: &[RealCalculusResult]) -> Table {
             ),
             Column::new(
                 "calibrated",
-                &format!("calibrated (every gap ≤ {CALIBRATED_GAP})"),
+                &format!("calibrated (ECE ≤ {CALIBRATED_ECE}, every gap ≤ {CALIBRATED_GAP})"),
             ),
+            Column::new("log_loss", "log loss"),
+            Column::new("vote_log_loss", "smoothed vote log loss"),
+            Column::new("beats_vote", "log loss < smoothed vote"),
         ],
+    )
+    .caption(
+        "Log loss: mean −ln P(true state) over the scored triplets. Smoothed vote: each triplet's histogram of single-frame \
+         ML states with one pseudo-count per state — a map whose probabilities lose to it says less than counting frames.",
     );
     for r in results {
         t.push(vec![
@@ -225,7 +242,10 @@ fn calibration_table(results: &[RealCalculusResult]) -> Table {
             },
             Cell::number(r.calibration.ece, 3),
             Cell::number(r.calibration.max_gap, 3),
-            yes_no(r.calibration.max_gap <= CALIBRATED_GAP),
+            yes_no(r.calibration.is_calibrated()),
+            Cell::number(r.log_loss, 3),
+            Cell::number(r.vote_log_loss, 3),
+            yes_no(r.log_loss < r.vote_log_loss),
         ]);
     }
     t
@@ -381,8 +401,18 @@ fn claims(results: &[RealCalculusResult]) -> Vec<Claim> {
     );
     let (ours_cal, all_cal) = count_of(
         results,
-        |r| r.calibration.max_gap <= CALIBRATED_GAP,
-        |r| format!("{} {:.3}", r.calculus, r.calibration.max_gap),
+        |r| r.calibration.is_calibrated(),
+        |r| {
+            format!(
+                "{} ECE {:.3}, gap {:.3}",
+                r.calculus, r.calibration.ece, r.calibration.max_gap
+            )
+        },
+    );
+    let (ours_loss, all_loss) = count_of(
+        results,
+        |r| r.log_loss < r.vote_log_loss,
+        |r| format!("{} {:.3} vs {:.3}", r.calculus, r.log_loss, r.vote_log_loss),
     );
     let (ours_vote, all_vote) = count_of(
         results,
@@ -410,10 +440,17 @@ fn claims(results: &[RealCalculusResult]) -> Vec<Claim> {
             why: "Eq. 2.10 counts every frame as independent evidence; frames of a robot standing still or of one geometry seen again and again are not, and make the map surer than it is (see tempering)".into(),
         },
         Claim {
-            what: format!("The map's probabilities are consistent: every well-filled P(ML) bin within {CALIBRATED_GAP} of its accuracy"),
+            what: format!("The map's probabilities are consistent: ECE ≤ {CALIBRATED_ECE} and every P(ML) bin of ≥ {MIN_BIN} triplets within {CALIBRATED_GAP} of its accuracy"),
             thesis: "\"maps created with the PQRM have a consistent estimate of the distribution over qualitative states\" (§2.4)".into(),
             ours: ours_cal,
             verdict: Verdict::agree_if(all_cal),
+            why: String::new(),
+        },
+        Claim {
+            what: "The map's probabilities say more than counting frames: log loss below the smoothed vote's".into(),
+            thesis: "the premise of a probabilistic map (§2.4); the thesis compares with no baseline".into(),
+            ours: ours_loss,
+            verdict: Verdict::agree_if(all_loss),
             why: String::new(),
         },
         Claim {
@@ -424,39 +461,6 @@ fn claims(results: &[RealCalculusResult]) -> Vec<Claim> {
             why: String::new(),
         },
     ]
-}
-
-/// The held-out log score against τ, per calculus, relative to τ = 1.
-fn temper_figure(t: &Tempering) -> Figure {
-    let line = |name: String, points: Vec<(f64, f64)>| Line {
-        name,
-        points,
-        err: None,
-        reference: false,
-    };
-    Figure {
-        name: "temper_fit".into(),
-        title: "Held-out log score against τ (relative to τ = 1; the chosen τ is the maximum)"
-            .into(),
-        x_label: "log10 τ".into(),
-        y_label: "gain in mean log predictive probability (nats)".into(),
-        plot: Plot::Lines {
-            series: t
-                .fits
-                .iter()
-                .map(|f| {
-                    let base = f.untempered_score().unwrap_or(0.0);
-                    line(
-                        f.calculus.clone(),
-                        f.scores
-                            .iter()
-                            .map(|p| (p.temper.log10(), p.log_score - base))
-                            .collect(),
-                    )
-                })
-                .collect(),
-        },
-    }
 }
 
 fn figures(out: &RealDataOutput) -> Vec<Figure> {
@@ -545,143 +549,6 @@ fn short_title(title: &str) -> String {
     } else {
         title.to_owned()
     }
-}
-
-fn tempering_table(t: &Tempering) -> Table {
-    let better = t
-        .chosen
-        .iter()
-        .zip(&t.untempered)
-        .filter(|(c, u)| c.calibration.ece <= u.calibration.ece)
-        .count();
-    let mut table = Table::new(
-        "tempering",
-        "Tempering chosen from the data",
-        vec![
-            Column::new("calculus", "calculus"),
-            Column::new("temper", "τ"),
-            Column::new("accuracy", "accuracy"),
-            Column::new("p_ml_mean", "mean P(ML), τ = 1 → τ"),
-            Column::new("ece", "ECE, τ = 1 → τ"),
-            Column::new("max_gap", "largest gap, τ = 1 → τ"),
-            Column::new("calibrated", "calibrated at τ"),
-        ],
-    )
-    .caption(format!(
-        "Eq. 2.10 counts every frame as independent evidence; frames of a robot standing still, or of one \
-         geometry seen again and again, are not. τ is chosen per calculus without ground truth: the frames are cut into contiguous blocks, \
-         each held out once, and τ is the exponent under which the other blocks' map best predicts the held-out frames (mean log predictive \
-         probability; `temper.csv`, `temper_fit.svg`). Tempering changes no most-likely state — the error is the same — only how sure the map says it is. \
-         The chosen τ lowers or keeps the expected calibration error for {better} of {} calculi. The criterion assumes that frames err \
-         independently given the geometry (then it finds the τ a ground truth would pick: `crates/pqrm/tests/temper_fit.rs`); errors shared by \
-         neighbouring frames make it hedge, and a fitted noise may already absorb them.",
-        t.fits.len()
-    ));
-    let arrow = |a: f64, b: f64| Cell {
-        csv: format!("{a};{b}"),
-        text: format!("{a:.3} → {b:.3}"),
-    };
-    for ((f, c), u) in t.fits.iter().zip(&t.chosen).zip(&t.untempered) {
-        table.push(vec![
-            Cell::text(f.calculus.clone()),
-            Cell::number(f.chosen, 3),
-            Cell::number(1.0 - c.pqrm.error_rate, 3),
-            arrow(u.pqrm.p_ml_mean, c.pqrm.p_ml_mean),
-            arrow(u.calibration.ece, c.calibration.ece),
-            arrow(u.calibration.max_gap, c.calibration.max_gap),
-            yes_no(c.calibration.max_gap <= CALIBRATED_GAP),
-        ]);
-    }
-    table
-}
-
-/// `temper.csv`: every τ tried per calculus, as before the move.
-fn temper_csv(t: &Tempering) -> Table {
-    let mut table = Table::new(
-        "temper",
-        "Held-out log score per τ",
-        ["calculus", "temper", "outlier_rate", "log_score", "chosen"]
-            .iter()
-            .map(|k| Column::new(k, k))
-            .collect(),
-    )
-    .data_only();
-    for f in &t.fits {
-        for p in &f.scores {
-            table.push(vec![
-                Cell::text(f.calculus.clone()),
-                Cell::text(p.temper.to_string()),
-                Cell::text(p.outlier_rate.to_string()),
-                Cell::fixed(p.log_score, 6),
-                Cell::text((p.temper == f.chosen).to_string()),
-            ]);
-        }
-    }
-    table
-}
-
-/// `temper.json`: the fits beside the maps at τ = 1 and at the chosen τ, as before the move.
-fn temper_json(t: &Tempering) -> Attachment {
-    let rows: Vec<serde_json::Value> = t
-        .fits
-        .iter()
-        .zip(&t.chosen)
-        .zip(&t.untempered)
-        .map(|((f, c), u)| {
-            json!({
-                "fit": f,
-                "untempered": {"p_ml_mean": u.pqrm.p_ml_mean, "calibration": u.calibration, "mean_entropy": u.pqrm.mean_entropy},
-                "tempered": {"p_ml_mean": c.pqrm.p_ml_mean, "calibration": c.calibration, "mean_entropy": c.pqrm.mean_entropy},
-            })
-        })
-        .collect();
-    Attachment::text(
-        "temper.json",
-        serde_json::to_string_pretty(&rows).unwrap_or_default(),
-    )
-}
-
-fn sensor_models_table(sweep: &[SensorVariant]) -> Table {
-    let mut t = Table::new(
-        "sensor_models",
-        "Sensor models and tempering",
-        vec![
-            Column::new("sensor", "sensor"),
-            Column::new("temper", "τ"),
-            Column::new("calculus", "calculus"),
-            Column::new("error_rate", "PQRM error"),
-            Column::new("majority_error_rate", "majority vote"),
-            Column::new("beats_majority", "≤ majority").human_only(),
-            Column::new("p_ml_mean", "mean P(ML)"),
-            Column::new("ece", "ECE"),
-            Column::new("max_gap", "largest gap"),
-            Column::new("calibrated", "calibrated").human_only(),
-        ],
-    )
-    .caption(format!(
-        "The same frames mapped under each inverse sensor model and tempering exponent τ (each frame's \
-         log-likelihood × τ). Heavy tails keep one outlier frame from ruling a state out; τ < 1 counts correlated frames as fewer \
-         independent ones. Calibrated = every well-filled P(ML) bin within {CALIBRATED_GAP} of its accuracy."
-    ));
-    let num = |v: f64| Cell {
-        csv: format!("{v:.4}"),
-        text: format!("{v:.3}"),
-    };
-    for v in sweep {
-        t.push(vec![
-            Cell::text(v.sensor.label()),
-            Cell::text(v.temper.to_string()),
-            Cell::text(v.calculus.clone()),
-            num(v.error_rate),
-            num(v.majority_error_rate),
-            yes_no(v.error_rate <= v.majority_error_rate),
-            num(v.p_ml_mean),
-            num(v.ece),
-            num(v.max_gap),
-            yes_no(v.max_gap <= CALIBRATED_GAP),
-        ]);
-    }
-    t
 }
 
 fn many_robots_table(robots: &[RobotComparison]) -> Table {
@@ -844,6 +711,21 @@ mod tests {
     }
 
     #[test]
+    fn probabilities_must_beat_the_smoothed_vote_on_every_calculus() {
+        let mut a = result("edc", [0.1, 0.05], 0.9, 0.01, 0.2);
+        let mut b = result("left-right", [0.02, 0.0], 0.98, 0.01, 0.02);
+        (a.log_loss, a.vote_log_loss) = (0.3, 1.2);
+        (b.log_loss, b.vote_log_loss) = (0.05, 0.06);
+        let says = "The map's probabilities say more";
+        assert_eq!(
+            verdict_of(&claims(&[a.clone(), b.clone()]), says),
+            Verdict::Agree
+        );
+        b.log_loss = 0.06; // a tie is not "below"
+        assert_eq!(verdict_of(&claims(&[a, b]), says), Verdict::Disagree);
+    }
+
+    #[test]
     fn an_overconfident_map_is_not_called_conservative() {
         // MRCLAM's full run: mean P(ML) 0.998 with accuracy 0.967 — surer than right
         let sure = [result("edc", [0.033, 0.015], 0.998, 0.035, 0.062)];
@@ -867,15 +749,21 @@ mod tests {
         let c = claims(&both);
         assert_eq!(verdict_of(&c, "Error halves"), Verdict::Agree);
         assert_eq!(verdict_of(&c, "The filter beats voting"), Verdict::Agree);
-        assert_eq!(verdict_of(&c, "The map's probabilities"), Verdict::Agree);
+        assert_eq!(
+            verdict_of(&c, "The map's probabilities are consistent"),
+            Verdict::Agree
+        );
         let one_short = [
-            result("edc", [0.1, 0.051], 0.9, 0.06, 0.099),
+            result("edc", [0.1, 0.051], 0.9, 0.11, 0.099),
             result("left-right", [0.02, 0.0], 0.98, 0.01, 0.02),
         ];
         let c = claims(&one_short);
         assert_eq!(verdict_of(&c, "Error halves"), Verdict::Disagree);
         assert_eq!(verdict_of(&c, "The filter beats voting"), Verdict::Disagree);
-        assert_eq!(verdict_of(&c, "The map's probabilities"), Verdict::Disagree);
+        assert_eq!(
+            verdict_of(&c, "The map's probabilities are consistent"),
+            Verdict::Disagree
+        );
         assert!(claims(&[]).iter().all(|c| c.verdict == Verdict::Disagree));
     }
 }

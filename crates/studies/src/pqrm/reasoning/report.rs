@@ -24,7 +24,11 @@ pub fn report(config: &ReasonConfig, output: &ReasonOutput) -> Report {
     }
     Report {
         title: format!("Reasoning over maps — {}", config.input.display()),
-        setup: setup(output, best),
+        setup: format!(
+            "{}\n\n{}",
+            crate::pqrm::real_data::recordings::evidence_sentence(config.study.evidence),
+            setup(output, best)
+        ),
         tables: vec![scores_table(&output.results), check_table(&output.results)],
         claims: output
             .results
