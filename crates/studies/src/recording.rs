@@ -121,6 +121,12 @@ impl NoiseRequest {
     /// # Errors
     /// [`StudyError::InvalidParameter`] naming `sigma_range` or `sigma_bearing`.
     pub fn validate(&self) -> Result<()> {
+        self.fixed().validate()?;
+        Ok(())
+    }
+
+    /// The σs given, MRCLAM's where one is missing (unchecked).
+    fn fixed(&self) -> RangeBearingNoise {
         RangeBearingNoise {
             sigma_range: self
                 .sigma_range
@@ -129,8 +135,6 @@ impl NoiseRequest {
                 .sigma_bearing
                 .unwrap_or(RangeBearingNoise::MRCLAM.sigma_bearing),
         }
-        .validate()?;
-        Ok(())
     }
 
     /// The noise to read `input` (of form `format`) with. A fit nobody asked for that fails (a
@@ -146,15 +150,8 @@ impl NoiseRequest {
         input: &Path,
         warn: &dyn Fn(String),
     ) -> Result<ResolvedNoise> {
-        let fixed = RangeBearingNoise {
-            sigma_range: self
-                .sigma_range
-                .unwrap_or(RangeBearingNoise::MRCLAM.sigma_range),
-            sigma_bearing: self
-                .sigma_bearing
-                .unwrap_or(RangeBearingNoise::MRCLAM.sigma_bearing),
-        };
         self.validate()?;
+        let fixed = self.fixed();
         let given = self.sigma_range.is_some() || self.sigma_bearing.is_some();
         let fixed_only = ResolvedNoise {
             noise: fixed,
