@@ -43,12 +43,12 @@ impl TableFormat {
 pub fn announce_derivation(c: &BinaryCalculus) {
     let cached = qsr_core::binary::default_cache_dir()
         .is_some_and(|d| qsr_core::binary::cache_path(c, &d).exists());
-    let seconds = c.compose_cost().seconds();
-    if !cached && seconds >= 5.0 {
-        eprintln!(
-            "{}: deriving its composition table, about {seconds:.0} s of CPU (estimated; \
-             cached afterwards)",
-            c.name()
+    if !cached {
+        crate::progress::announce_cost(
+            &format!("{}: deriving its composition table", c.name()),
+            c.compose_cost(),
+            &qsr_core::binary::DERIVATION_BUDGET,
+            "cached afterwards",
         );
     }
 }

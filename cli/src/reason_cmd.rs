@@ -424,6 +424,12 @@ pub fn run(cmd: ReasonCmd) -> Result<()> {
         }
         ReasonCmd::Close(args) => {
             let (network, algebra) = load(&args)?;
+            crate::progress::announce_cost(
+                &format!("closing {} points", network.n_points()),
+                qsr_core::reason::closure_cost(network.n_points(), algebra.n_states()),
+                &qsr_core::cost::Budget::RUN,
+                "an upper bound: a network of singletons closes several times faster",
+            );
             let closed = close(network, &algebra)?;
             if let Some(c) = &closed.contradiction {
                 eprintln!("inconsistent: {}", c.describe(&closed.network));

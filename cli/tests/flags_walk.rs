@@ -10,10 +10,8 @@
 
 mod common;
 
-use std::io::Write;
 use std::path::{Path, PathBuf};
-use std::process::{Command, Stdio};
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
 fn corpus(rel: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -148,48 +146,8 @@ const FLOATS_UNBOUNDED: [(&str, &str); 3] = [
     ("reason infer", "--epsilon"),
 ];
 
-struct Outcome {
-    code: Option<i32>,
-    stdout: String,
-    stderr: String,
-    took: Duration,
-    timed_out: bool,
-}
-
-fn run(args: &[String], stdin: &str, limit: Duration) -> Outcome {
-    let t0 = Instant::now();
-    let mut child = Command::new(env!("CARGO_BIN_EXE_qrm"))
-        .args(args)
-        .stdin(Stdio::piped())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
-    let mut pipe = child.stdin.take().unwrap();
-    let input = stdin.to_owned();
-    let writer = std::thread::spawn(move || {
-        let _ = pipe.write_all(input.as_bytes());
-    });
-    let (tx, rx) = std::sync::mpsc::channel();
-    let id = child.id();
-    let waiter = std::thread::spawn(move || {
-        let o = child.wait_with_output().unwrap();
-        let _ = tx.send(());
-        o
-    });
-    let timed_out = rx.recv_timeout(limit).is_err();
-    if timed_out {
-        let _ = Command::new("kill").args(["-9", &id.to_string()]).status();
-    }
-    let o = waiter.join().unwrap();
-    let _ = writer.join();
-    Outcome {
-        code: o.status.code(),
-        stdout: String::from_utf8_lossy(&o.stdout).into_owned(),
-        stderr: String::from_utf8_lossy(&o.stderr).into_owned(),
-        took: t0.elapsed(),
-        timed_out,
-    }
+fn run(args: &[String], stdin: &str, limit: Duration) -> common::Run {
+    common::run_within(args, &[], stdin.as_bytes(), limit)
 }
 
 /// The values each kind of flag is walked with.

@@ -121,7 +121,10 @@ fn a_huge_sample_count_is_refused_with_its_estimate_not_a_capacity_overflow() {
         "--out",
         d.join("out").to_str().unwrap(),
     ]);
-    assert!(err.contains("samples") && err.contains("GB"), "{err}");
+    assert!(
+        err.contains("samples") && err.contains("GiB") && err.contains("the limits are"),
+        "{err}"
+    );
     let _ = std::fs::remove_dir_all(&d);
 }
 

@@ -5,9 +5,10 @@
 //! (regenerate with `QRM_BLESS=1 cargo test -p qrm-cli --test reliability_table`).
 #![allow(clippy::unwrap_used)] // tests: a panic is the failure report
 
-use std::io::Write;
+mod common;
+
 use std::path::{Path, PathBuf};
-use std::process::{Command, Stdio};
+use std::time::Duration;
 
 fn root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("..")
@@ -412,23 +413,15 @@ fn run(surface: &Surface, input: &[u8], dir: &Path) -> Outcome {
             input.to_vec(),
         ),
     };
-    let mut child = Command::new(env!("CARGO_BIN_EXE_qrm"))
-        .args(&args)
-        .env("QRM_CACHE_DIR", "")
-        .stdin(Stdio::piped())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
-    let mut pipe = child.stdin.take().unwrap();
-    let writer = std::thread::spawn(move || {
-        let _ = pipe.write_all(&stdin);
-    });
-    let o = child.wait_with_output().unwrap();
-    let _ = writer.join();
-    let shown = |b: &[u8]| String::from_utf8_lossy(b).replace(dir.to_str().unwrap(), "<dir>");
+    let o = common::run_within(
+        &args,
+        &[("QRM_CACHE_DIR", "")],
+        &stdin,
+        Duration::from_secs(600),
+    );
+    let shown = |b: &str| b.replace(dir.to_str().unwrap(), "<dir>");
     Outcome {
-        code: o.status.code(),
+        code: o.code,
         stderr: shown(&o.stderr),
         stdout: shown(&o.stdout),
         left_dir: out.exists(),
@@ -482,7 +475,18 @@ fn every_surface_meets_every_bad_input_with_a_typed_error_or_a_clean_result() {
          written beside its name and renamed.\n\n\
          **Caches.** The derived tables cached on disk (`~/.cache/qrm`, `QRM_CACHE_DIR`) carry a \
          checksum of their contents; a file that does not verify is derived again and \
-         replaced, never believed.\n\n",
+         replaced, never believed.\n\n\
+         **Work and memory.** Every knob that drives work — a study's trials, steps, landmarks \
+         and samples, a network's points, a calculus's granularity, a grid's cells, a \
+         look-ahead's horizon — feeds one estimate (`qsr_core::cost::Cost`: peak bytes and \
+         core-seconds at measured rates) checked before anything is allocated against 4 GiB and \
+         48 core-hours (a table derivation: 1 core-hour; one navigation decision: 60 \
+         core-seconds). A refusal names the knobs with their values, the estimate and the \
+         limits in one form (`… needs about 4.01 GiB and 1 core-hour; the limits are 4 GiB and \
+         48 core-hours: fewer points`); work accepted but estimated past 5 core-seconds is \
+         announced with the same estimate on stderr before it starts \
+         (`cli/tests/network_walk.rs` holds a 120-point closure's peak memory and time to \
+         it).\n\n",
     );
     for s in surfaces() {
         doc.push_str(&format!(

@@ -8,6 +8,7 @@
 //!     how many of those are truly wrong (precision) and how many wrong entries it finds
 //!     (recall).
 
+use qsr_core::cost::Budget;
 use qsr_core::progress::{Progress, phase};
 use std::collections::BTreeMap;
 
@@ -156,19 +157,20 @@ impl ReasonStudyConfig {
             * (l - 1.0)
             * (l - 2.0)
             * self.map.samples as f64;
-        if work > crate::study::MAX_STUDY_WORK {
-            return bad(format!(
-                "part (b) would classify about {work:.2e} triplet-samples (worlds_b = {}, {} \
-                 calculi, world.step_deg = {}, world.landmarks = {}, map.samples = {}); the \
-                 limit is {:.0e}",
-                self.worlds_b,
-                self.calculi.len(),
-                self.world.step_deg,
-                self.world.landmarks,
-                self.map.samples,
-                crate::study::MAX_STUDY_WORK
-            ));
-        }
+        crate::study::classification_cost(work)
+            .check(
+                &Budget::RUN,
+                format!(
+                    "part (b): worlds_b × calculi × steps (world.step_deg) × ordered triplets \
+                     (world.landmarks) × map.samples = {} × {} × {steps} × {} × {} = \
+                     {work:.2e} triplet-samples",
+                    self.worlds_b,
+                    self.calculi.len(),
+                    l * (l - 1.0) * (l - 2.0),
+                    self.map.samples
+                ),
+            )
+            .map_err(|e| PqrmError::InvalidConfig(e.to_string()))?;
         self.evidence.validate()?;
         self.map.validate()
     }

@@ -8,6 +8,7 @@
 //! Both studies sample the finest calculus (the first one given) once per step and merge its
 //! counts into the coarser ones, as the thesis evaluates all six on the same data.
 
+use qsr_core::cost::{Budget, Cost};
 use qsr_core::progress::Progress;
 use std::collections::BTreeMap;
 
@@ -71,12 +72,11 @@ pub const MAX_STUDY_LANDMARKS: usize = 200;
 /// took 1.11 s of CPU, simulation, filter and scoring included.
 pub const SECONDS_PER_TRIPLET_SAMPLE: f64 = 5.6e-9;
 
-/// The most CPU time a study simulating worlds may be estimated at (core-hours).
-pub const MAX_STUDY_CORE_HOURS: f64 = 48.0;
-
-/// The most triplet-samples one run may classify: [`MAX_STUDY_CORE_HOURS`] at
-/// [`SECONDS_PER_TRIPLET_SAMPLE`] (the full-scale Monte Carlo study is about 3.8 × 10¹¹).
-pub const MAX_STUDY_WORK: f64 = MAX_STUDY_CORE_HOURS * 3600.0 / SECONDS_PER_TRIPLET_SAMPLE;
+/// What classifying `triplet_samples` takes at [`SECONDS_PER_TRIPLET_SAMPLE`] (the full-scale
+/// Monte Carlo study is about 3.8 × 10¹¹: 0.6 core-hours).
+pub fn classification_cost(triplet_samples: f64) -> Cost {
+    Cost::work(triplet_samples, SECONDS_PER_TRIPLET_SAMPLE)
+}
 
 /// Settings of the Monte Carlo study (defaults: DESIGN §4 at full scale).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -227,15 +227,23 @@ impl MonteCarloConfig {
         let l = self.landmarks as f64;
         let work =
             levels * self.trials as f64 * steps * l * (l - 1.0) * (l - 2.0) * self.samples as f64;
-        if work > MAX_STUDY_WORK {
-            return bad(format!(
-                "this study would classify about {work:.2e} triplet-samples (≈ {:.0} core-hours at \
-                 {:.1} ns each, measured); the limit is {MAX_STUDY_CORE_HOURS} core-hours: fewer \
-                 trials, samples, landmarks or levels, or a coarser step_deg",
-                work * SECONDS_PER_TRIPLET_SAMPLE / 3600.0,
-                SECONDS_PER_TRIPLET_SAMPLE * 1e9
-            ));
-        }
+        classification_cost(work)
+            .check(
+                &Budget::RUN,
+                format!(
+                    "levels × trials × steps × ordered triplets × samples = {levels} × {} × \
+                     {steps} × {} × {} = {work:.2e} triplet-samples",
+                    self.trials,
+                    l * (l - 1.0) * (l - 2.0),
+                    self.samples
+                ),
+            )
+            .map_err(|e| {
+                PqrmError::InvalidConfig(
+                    e.hint("fewer trials, samples, landmarks or levels, or a coarser step_deg")
+                        .to_string(),
+                )
+            })?;
         Ok(())
     }
 }

@@ -20,9 +20,15 @@
 use serde::{Deserialize, Serialize};
 
 use crate::error::{QlinkError, Result};
+use qsr_core::cost::{Budget, Cost};
 
-/// The most belief updates one decision's look-ahead may take (about a minute).
-pub const MAX_POMDP_WORK: f64 = 1e10;
+/// Core-seconds per belief entry updated in a look-ahead, measured: EDC (20 states), direct
+/// moves, one thread, horizons 3–5 (1.6 · 10⁵ … 6.4 · 10⁷ entries): 0.8–0.9 ns an entry.
+pub const SECONDS_PER_BELIEF_ENTRY: f64 = 9e-10;
+
+/// What one decision's look-ahead may take: a minute of one core (a navigator decides at
+/// every step, so a decision of hours is a mistaken horizon, not a long run).
+pub const DECISION_BUDGET: Budget = Budget::new(1024.0 * 1024.0 * 1024.0, 60.0);
 
 /// A search POMDP over the states of one calculus.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -228,7 +234,7 @@ impl SearchPomdp {
     }
 
     /// The look-ahead visits about `b^h` beliefs (`b` the most moves allowed from a state) of
-    /// `n` entries each: refused beyond [`MAX_POMDP_WORK`] with the estimate instead of
+    /// `n` entries each: refused beyond [`DECISION_BUDGET`] with the estimate instead of
     /// running without end (issue 17: horizon 1000).
     fn check_work(&self, horizon: usize) -> Result<()> {
         let n = self.n_states().max(1) as f64;
@@ -239,13 +245,17 @@ impl SearchPomdp {
             .max()
             .unwrap_or(1)
             .max(1) as f64;
-        let work = n * b.powf(horizon as f64);
-        if work > MAX_POMDP_WORK {
-            return Err(QlinkError::InvalidParameter(format!(
-                "a horizon-{horizon} look-ahead over {b} moves per state is about {work:.1e} \
-                 belief updates; the limit is {MAX_POMDP_WORK:.0e}: use a shorter horizon"
-            )));
-        }
+        Cost::work(n * b.powf(horizon as f64), SECONDS_PER_BELIEF_ENTRY)
+            .check(
+                &DECISION_BUDGET,
+                format!(
+                    "a horizon-{horizon} look-ahead over {b} moves per state (n × b^h = {n} × \
+                     {b}^{horizon} belief entries)"
+                ),
+            )
+            .map_err(|e| {
+                QlinkError::InvalidParameter(e.hint("use a shorter horizon").to_string())
+            })?;
         Ok(())
     }
 

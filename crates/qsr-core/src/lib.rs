@@ -28,6 +28,9 @@
 //! - `from_*` / `to_*` convert specs and frames.
 //! - Reasoning over constraint networks (closure, scenarios) lives in [`reason`]; binary
 //!   calculi (OPRA-m, STAR-m) with exact converse and composition in [`binary`].
+//! - What work will take is a [`cost::Cost`] (peak bytes, core-seconds at measured rates),
+//!   checked against a [`cost::Budget`] before anything is allocated; every crate of qrm
+//!   estimates and refuses through it, so every refusal reads alike.
 //!
 //! ## Conventions
 //! Normalised ternary frame: A = (0, 0), B = (0, 1), **x < 0 is left** of A→B (a proper
@@ -43,7 +46,7 @@
 //! | `Spec` | malformed spec, duplicate label, bad pattern, overlap, gap, unreachable state, bad raster |
 //! | `UnknownCalculus`, `UnknownState`, `UnknownOperation` | names that do not exist |
 //! | `Unsupported` | permutations/composition of non-ternary spec calculi (binary ones: [`binary`]) |
-//! | `TooLarge` | a derived table (e.g. OPRA-11 composition) beyond the memory or work limit, with the estimate |
+//! | `TooLarge` | a derived table (e.g. OPRA-11 composition) beyond its [`cost::Budget`], with the estimate |
 //! | `Arity` | wrong number of inputs, wrong frame kind, mismatched lengths |
 //! | `NotARefinement` | merging into a calculus that is not coarser |
 //! | `Network` | malformed constraint network (JSON or SparQ text), with line/column or constraint position |
@@ -68,6 +71,7 @@ pub mod binary;
 mod builtin;
 mod calculus;
 mod compose;
+pub mod cost;
 pub mod coverage;
 mod derived;
 mod describe;

@@ -311,7 +311,7 @@ fn any_opra_granularity_classifies_and_too_fine_tables_are_refused_with_the_esti
         "ids are 16 bits"
     );
     let cost = BinaryCalculus::builtin("opra-10").unwrap().compose_cost();
-    assert!(cost.bytes <= qsr_core::binary::MAX_TABLE_BYTES);
+    assert!(cost.fits(&qsr_core::binary::DERIVATION_BUDGET), "{cost}");
 }
 
 /// Regression (issue 17): points 1e300 apart were "coincident" because the tolerance test

@@ -582,3 +582,27 @@ fn regression_a_gqr_spec_with_a_latin1_comment_loads() {
     assert_eq!(alg.labels(), ["<", "=", ">"]);
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// Issue 39: the binary point cap (4,096) bounded the sets' count, not their size — 4,096
+/// points of OPRA-10 (1,640 relations, 26 words a set) ask for about 7 GiB. The estimate
+/// counts the words: refused with it, naming the points, before anything is allocated; the
+/// same points of OPRA-1 (one word) are built.
+#[test]
+fn a_binary_network_is_refused_by_its_sets_memory_not_only_by_its_point_count() {
+    let names: Vec<String> = (0..4_000).map(|i| format!("p{i}")).collect();
+    let fine = BinaryCalculus::builtin("opra-10").unwrap();
+    let t0 = std::time::Instant::now();
+    let err = BinaryNetwork::universal(&fine, names.clone())
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.contains("4000 points") && err.contains("GiB") && err.contains("the limits are"),
+        "{err}"
+    );
+    assert!(t0.elapsed().as_secs_f64() < 5.0, "{:?}", t0.elapsed());
+    let coarse = BinaryCalculus::builtin("opra-1").unwrap();
+    assert_eq!(
+        BinaryNetwork::universal(&coarse, names).unwrap().n_points(),
+        4_000
+    );
+}

@@ -18,11 +18,10 @@ use serde::{Deserialize, Serialize};
 use crate::belief::{Belief, BeliefSet};
 use crate::bvn;
 use crate::error::{Result, SergeError};
+use qsr_core::cost::{Budget, Cost};
 
 /// Most cells a grid may have (masses are stored densely, `K × N` f64).
 pub const MAX_CELLS: usize = 4_000_000;
-/// The most memory the K × N cell masses may take.
-pub const MAX_MASS_BYTES: u64 = 4 << 30;
 
 /// A rectangular grid: `nx × ny` cells over `window = [x0, x1, y0, y1]`, row-major, row 0 at
 /// `y0`.
@@ -184,15 +183,9 @@ impl CellMasses {
         let k = beliefs.len();
         // Estimated before allocating: 400 beliefs on a 2000×2000 grid are 12.8 GB of masses,
         // which the allocator would abort on rather than report (issue 17).
-        let bytes = (k as u64).saturating_mul(n as u64).saturating_mul(8);
-        if bytes > MAX_MASS_BYTES {
-            return Err(SergeError::InvalidParameter(format!(
-                "{k} beliefs × {n} cells need {:.1} GiB of cell masses; the limit is {} GiB: \
-                 use a coarser grid",
-                bytes as f64 / f64::from(1u32 << 30),
-                MAX_MASS_BYTES >> 30
-            )));
-        }
+        Cost::memory(k as f64 * n as f64 * 8.0)
+            .check(&Budget::RUN, format!("{k} beliefs × {n} cells of masses"))
+            .map_err(|e| SergeError::InvalidParameter(e.hint("use a coarser grid").to_string()))?;
         // Written in place, one belief's row per task: no second copy at the peak.
         let mut data = vec![0.0; k * n];
         data.par_chunks_mut(n.max(1))

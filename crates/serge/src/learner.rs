@@ -9,6 +9,7 @@ use crate::grid::{CellMasses, Grid};
 use crate::learn::triplet_beliefs;
 use crate::selection::{Selected, Sighting, TripletSelection};
 use crate::{SalientRegionMap, Serge, SergeParams};
+use qsr_core::cost::{Budget, Cost};
 
 /// How a calculus is learned. One seed (the selection's) draws the triplets, their belief
 /// samples and SERGE's trials, so a learner and its frames give one calculus.
@@ -54,20 +55,16 @@ impl CalculusLearner {
         }
     }
 
-    /// The most memory a learner may ask for (bytes): its samples and cell masses.
-    pub const MAX_BYTES: f64 = 4.0 * (1u64 << 30) as f64;
-
     /// Bytes the learner will hold at most: `samples` points (16 B) and `cells²` masses (8 B)
     /// per selected triplet, and SERGE's work arrays over the cells (a few per cell).
-    #[must_use]
-    pub fn estimated_bytes(&self) -> f64 {
+    pub fn estimated_cost(&self) -> Cost {
         let triplets = self.selection.max_triplets as f64;
         let cells = (self.cells as f64).powi(2);
-        triplets * (self.samples as f64 * 16.0 + cells * 8.0) + cells * 64.0
+        Cost::memory(triplets * (self.samples as f64 * 16.0 + cells * 8.0) + cells * 64.0)
     }
 
     /// Checks the sizes before any work: samples, cells and triplets of at least one, and
-    /// the memory they ask for within [`CalculusLearner::MAX_BYTES`] (issue 39: `--samples
+    /// the memory they ask for within [`Budget::RUN`] (issue 39: `--samples
     /// 18446744073709551615` panicked with a capacity overflow).
     ///
     /// # Errors
@@ -84,18 +81,19 @@ impl CalculusLearner {
                 )));
             }
         }
-        let bytes = self.estimated_bytes();
-        if bytes > Self::MAX_BYTES {
-            return Err(crate::SergeError::InvalidParameter(format!(
-                "samples = {}, cells = {} and max_triplets = {} would hold about {:.1} GB; the \
-                 limit is {:.1} GB: fewer samples, cells or triplets",
-                self.samples,
-                self.cells,
-                self.selection.max_triplets,
-                bytes / 1e9,
-                Self::MAX_BYTES / 1e9
-            )));
-        }
+        self.estimated_cost()
+            .check(
+                &Budget::RUN,
+                format!(
+                    "samples = {}, cells = {} and max_triplets = {}",
+                    self.samples, self.cells, self.selection.max_triplets
+                ),
+            )
+            .map_err(|e| {
+                crate::SergeError::InvalidParameter(
+                    e.hint("fewer samples, cells or triplets").to_string(),
+                )
+            })?;
         Ok(())
     }
 

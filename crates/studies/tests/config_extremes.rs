@@ -114,8 +114,22 @@ fn every_config_field_at_every_extreme_is_refused_or_bounded() {
                 };
                 *slot(&mut c, path) = value;
                 let t0 = std::time::Instant::now();
-                let accepted = study.check(&c).is_ok();
+                let verdict = study.check(&c);
                 let took = t0.elapsed();
+                let accepted = verdict.is_ok();
+                // A refusal for work or memory is the one estimate's (qsr_core::cost), in its
+                // one form: the knobs, the estimate, the limits of a run.
+                if let Err(e) = &verdict {
+                    let text = e.to_string();
+                    if text.contains("needs about")
+                        && !text.contains("; the limits are 4 GiB and 48 core-hours")
+                    {
+                        problems.push(format!(
+                            "{} {path} = {x:e}: an estimate not in the one form: {text}",
+                            study.name()
+                        ));
+                    }
+                }
                 assert!(
                     took.as_secs_f64() < 1.0,
                     "{} {path} = {x:e}: the check took {took:?}",

@@ -12,20 +12,16 @@ pub use super::relations::BinaryFamily;
 use super::relations::Relations;
 use crate::calculus::StateId;
 use crate::compose::ComposeTable;
+use crate::cost::{Budget, Cost};
 use crate::error::{QsrError, Result};
 use crate::frame::DEGENERATE_TOLERANCE;
 use crate::neighbours::NeighbourGraph;
 
 /// Largest OPRA granularity: OPRA-63 has 63,756 relations, the most a 16-bit relation id
 /// holds. Classification and converse work for all; composition and neighbours are refused
-/// beyond [`MAX_TABLE_BYTES`] / [`MAX_DERIVATION_STEPS`] with the estimate (OPRA-10 is the
-/// largest composition that fits).
+/// beyond [`DERIVATION_BUDGET`] with the estimate (OPRA-10 is the largest composition that
+/// fits).
 pub const MAX_OPRA_M: usize = 63;
-/// The most memory a derived table may take.
-pub const MAX_TABLE_BYTES: u64 = 4 << 30;
-/// The most grid steps a composition derivation may take (OPRA-4 takes 6.4 · 10⁷, about half
-/// a second on two cores; this bound is tens of minutes).
-pub const MAX_DERIVATION_STEPS: u64 = 200_000_000_000;
 /// The binary calculi `qrm calculus list` shows (any `opra-M` up to [`MAX_OPRA_M`] and every
 /// even `star-m` work; `star-4` and `star-8` are listed with the spec calculi).
 pub const BINARY_NAMES: [&str; 4] = ["opra-1", "opra-2", "opra-3", "opra-4"];
@@ -67,27 +63,15 @@ pub(super) struct Derived {
     pub(super) algebra: OnceLock<super::algebra::BinaryAlgebra>,
 }
 
-/// What deriving a table would take, estimated before starting.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct DerivationCost {
-    /// Peak bytes (per-thread bitset tables and the result).
-    pub bytes: u64,
-    /// Grid steps.
-    pub steps: u64,
-}
+/// CPU seconds per grid step of a derivation, measured: `qrm calculus compose opra-4` (64 M
+/// steps) took 1.23 s of CPU and opra-6 (486 M) 8.9 s on the development machine — 18–19 ns
+/// a step.
+pub const SECONDS_PER_DERIVATION_STEP: f64 = 19e-9;
 
-impl DerivationCost {
-    /// CPU seconds per grid step, measured: `qrm calculus compose opra-4` (64 M steps) took
-    /// 1.23 s of CPU and opra-6 (486 M) 8.9 s on the development machine — 18–19 ns a step.
-    pub const SECONDS_PER_STEP: f64 = 19e-9;
-
-    /// The CPU time the derivation is expected to take (s): what a front end says before a
-    /// derivation of more than a few seconds starts (opra-8 ≈ 40 s, opra-10 ≈ 2 min).
-    #[must_use]
-    pub fn seconds(&self) -> f64 {
-        self.steps as f64 * Self::SECONDS_PER_STEP
-    }
-}
+/// What a derivation may take: a table is derived inside a command the user waits on (and
+/// cached afterwards), so an hour of one core and 4 GiB — OPRA-10's composition (about 2
+/// core-minutes, 1.2 GiB) fits, OPRA-11's does not.
+pub const DERIVATION_BUDGET: Budget = Budget::new(4.0 * (1u64 << 30) as f64, 3600.0);
 
 fn cache() -> &'static Mutex<Vec<BinaryCalculus>> {
     static CACHE: OnceLock<Mutex<Vec<BinaryCalculus>>> = OnceLock::new();
@@ -385,36 +369,31 @@ impl BinaryCalculus {
         )
     }
 
-    /// What deriving the composition table takes (checked by [`BinaryCalculus::compose_table`]).
-    #[must_use]
-    pub fn compose_cost(&self) -> DerivationCost {
-        let n = self.n_states() as u64;
-        let words = n.div_ceil(64);
-        // A bitset table per part plus the merged one, and the result's list headers.
-        let tables = derive::PARTS as u64 + 1;
-        let bytes = n * n * (8 * words * tables + 24);
-        DerivationCost {
-            bytes,
-            steps: derive::compose_steps(&self.relations(), TICKS_PER_UNIT),
-        }
+    /// What deriving the composition table takes (checked by [`BinaryCalculus::compose_table`]
+    /// against [`DERIVATION_BUDGET`]): a bitset table per part plus the merged one and the
+    /// result's list headers; the grid steps at [`SECONDS_PER_DERIVATION_STEP`].
+    pub fn compose_cost(&self) -> Cost {
+        let n = self.n_states() as f64;
+        let words = n / 64.0;
+        let tables = (derive::PARTS + 1) as f64;
+        let steps = derive::compose_steps(&self.relations(), TICKS_PER_UNIT) as f64;
+        Cost::new(
+            n * n * (8.0 * words.ceil() * tables + 24.0),
+            steps * SECONDS_PER_DERIVATION_STEP,
+        )
     }
 
     pub(super) fn check_compose(&self) -> Result<()> {
-        let cost = self.compose_cost();
-        if cost.bytes > MAX_TABLE_BYTES || cost.steps > MAX_DERIVATION_STEPS {
-            return Err(QsrError::TooLarge {
+        self.compose_cost()
+            .check(
+                &DERIVATION_BUDGET,
+                format!("its composition table ({} relations)", self.n_states()),
+            )
+            .map_err(|e| QsrError::TooLarge {
                 operation: "compose".into(),
                 calculus: self.name.clone(),
-                reason: format!(
-                    "its composition table needs about {:.1} GiB and {:.1e} grid steps; the \
-                     limits are {} GiB and {:.0e} (classification and converse work)",
-                    cost.bytes as f64 / f64::from(1u32 << 30),
-                    cost.steps as f64,
-                    MAX_TABLE_BYTES >> 30,
-                    MAX_DERIVATION_STEPS as f64
-                ),
-            });
-        }
+                reason: e.hint("classification and converse still work").to_string(),
+            })?;
         Ok(())
     }
 
@@ -429,8 +408,8 @@ impl BinaryCalculus {
     /// The composition table `{A:B} ∘ {B:C} → {A:C}` (derived on first use, then cached).
     ///
     /// # Errors
-    /// [`QsrError::TooLarge`] when the table would exceed [`MAX_TABLE_BYTES`] or
-    /// [`MAX_DERIVATION_STEPS`] (OPRA-11 and finer), with the estimate.
+    /// [`QsrError::TooLarge`] beyond [`DERIVATION_BUDGET`] (OPRA-11 and finer), with the
+    /// estimate.
     pub fn compose_table(&self) -> Result<&ComposeTable> {
         if let Some(t) = self.derived.compose.get() {
             return Ok(t);
@@ -453,26 +432,24 @@ impl BinaryCalculus {
     /// one is a limit of configurations of the other (a point moved, a heading turned).
     ///
     /// # Errors
-    /// [`QsrError::TooLarge`] beyond [`MAX_TABLE_BYTES`]: the graph keeps an `n × n`
+    /// [`QsrError::TooLarge`] beyond [`DERIVATION_BUDGET`]: the graph keeps an `n × n`
     /// distance matrix (OPRA-32 and finer).
     pub fn neighbours(&self) -> Result<&NeighbourGraph> {
         if let Some(g) = self.derived.neighbours.get() {
             return Ok(g);
         }
-        let n = self.n_states() as u64;
+        let n = self.n_states() as f64;
         // Adjacency (1 byte) and distances (8 bytes) per pair, and Dijkstra's maps.
-        let bytes = n * n * 24;
-        if bytes > MAX_TABLE_BYTES {
-            return Err(QsrError::TooLarge {
+        Cost::memory(n * n * 24.0)
+            .check(
+                &DERIVATION_BUDGET,
+                format!("its neighbour graph and distance matrix ({n} relations)"),
+            )
+            .map_err(|e| QsrError::TooLarge {
                 operation: "neighbours".into(),
                 calculus: self.name.clone(),
-                reason: format!(
-                    "its neighbour graph and distance matrix need about {:.1} GiB; the limit is {} GiB",
-                    bytes as f64 / f64::from(1u32 << 30),
-                    MAX_TABLE_BYTES >> 30
-                ),
-            });
-        }
+                reason: e.to_string(),
+            })?;
         Ok(crate::derived::get_or_derive(
             &self.derived.neighbours,
             || derive::derive_neighbours(&self.relations(), TICKS_PER_UNIT),

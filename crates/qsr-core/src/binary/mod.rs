@@ -66,8 +66,8 @@ pub use algebra_check::{AlgebraCheck, AlgebraLaw, LawVerdict, MAX_ASSOCIATIVITY_
 pub(crate) use cache::fnv1a;
 pub use cache::{CacheOutcome, cache_path, default_cache_dir};
 pub use calculus::{
-    BINARY_NAMES, BinaryCalculus, BinaryFamily, DerivationCost, MAX_DERIVATION_STEPS, MAX_OPRA_M,
-    MAX_STAR_M, MAX_TABLE_BYTES, is_binary_name, name_out_of_range,
+    BINARY_NAMES, BinaryCalculus, BinaryFamily, DERIVATION_BUDGET, MAX_OPRA_M, MAX_STAR_M,
+    SECONDS_PER_DERIVATION_STEP, is_binary_name, name_out_of_range,
 };
 pub use closure::{BinaryClosure, BinaryContradiction, close_binary};
 pub use consistency::{BinarySolution, SolveOptions, SolveOutcome, solve_binary};

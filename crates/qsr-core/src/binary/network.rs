@@ -9,6 +9,7 @@ use nalgebra::Point2;
 use super::algebra::{AsBinaryAlgebra, BinaryAlgebra};
 use super::calculus::BinaryCalculus;
 use crate::calculus::StateId;
+use crate::cost::{Budget, Cost};
 use crate::error::QsrError;
 use crate::reason::StateSet;
 use crate::reason::network::{network_error, sexpr};
@@ -49,8 +50,9 @@ impl BinaryNetwork {
     /// The network where nothing is known: every pair may be in any relation.
     ///
     /// # Errors
-    /// [`QsrError::Network`] for an empty or repeated name or more than
-    /// [`MAX_BINARY_POINTS`] points.
+    /// [`QsrError::Network`] for an empty or repeated name, more than
+    /// [`MAX_BINARY_POINTS`] points, or sets beyond [`Budget::RUN`]'s memory (the estimate is
+    /// in the message).
     pub fn universal<S: Into<String>>(
         algebra: &impl AsBinaryAlgebra,
         names: impl IntoIterator<Item = S>,
@@ -80,6 +82,14 @@ impl BinaryNetwork {
         }
         let n = names.len();
         let words = algebra.n_states().div_ceil(64);
+        // The sets, closure's copy of them (padded to its word size) and its edge queue: the
+        // count alone does not bound it (4,096 points of OPRA-10's 1,640 relations are 7 GiB).
+        Cost::memory((n * n) as f64 * (16.0 * words as f64 + 16.0))
+            .check(
+                &Budget::RUN,
+                format!("{n} points (n² sets of {} relations)", algebra.n_states()),
+            )
+            .map_err(|e| network_error("points", e.hint("fewer points").to_string()))?;
         let universal = StateSet::universal(algebra.n_states());
         let sets = universal.words().repeat(n * n);
         Ok(Self {

@@ -55,7 +55,7 @@ pub use algebra::{Algebra, TableScope};
 pub use closure::{
     Closure, ClosureOptions, ClosureStats, Contradiction, Rule, Step, close, close_with,
 };
-pub use network::{MAX_NETWORK_BYTES, Network};
+pub use network::{CLOSURE_SECONDS_PER_UNIT, Network, closure_cost};
 pub use network_format::NetworkFormat;
 pub use scenario::{ScenarioOptions, ScenarioOutcome, find_scenario};
 pub use state_set::StateSet;

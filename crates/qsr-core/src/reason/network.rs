@@ -6,14 +6,34 @@ use std::collections::HashMap;
 use nalgebra::Point2;
 
 use crate::calculus::{Calculus, StateId};
+use crate::cost::{Budget, Cost};
 use crate::error::QsrError;
 use crate::frame::FrameKind;
 use crate::reason::state_set::{StateSet, count, fill_universal, resolve_label, words_for};
 
-/// The most memory one network may take (its sets and, during closure, one record of
-/// provenance per ordered triplet): a network beyond it is refused with the estimate instead
-/// of exhausting the machine.
-pub const MAX_NETWORK_BYTES: u64 = 4 << 30;
+/// Core-seconds of closure per ordered triplet × fourth point × word of a set: measured on
+/// the half-known EDC networks of `cargo bench -p qsr-core --bench closure` (inferred sets of
+/// several states — the slowest case measured; a scenario closes about 4x faster): n = 140
+/// took 8.4 s on two threads, at most 16.9 core-seconds over 140⁴ units. The fitted exponent
+/// is 3.4 (n = 30 … 140), so n⁴ errs high for larger networks: an upper bound.
+pub const CLOSURE_SECONDS_PER_UNIT: f64 = 4.4e-8;
+
+/// What building and closing a network of `n` points takes, before anything is allocated.
+///
+/// Memory, per ordered triplet: its set, closure's transposed copy of it (one-word calculi)
+/// and a provenance record — measured peak at 200 points (double-cross, `qrm reason close`):
+/// 238 MB against this 224 MB; the output is streamed, not held (issue 39: the whole JSON
+/// value of a 100-point result took 1.3 GB where this said 20 MB). Work: each of the n³
+/// ordered triplets is revised against every fourth point, at
+/// [`CLOSURE_SECONDS_PER_UNIT`] per word of its set.
+pub fn closure_cost(n: usize, n_states: usize) -> Cost {
+    let n = n as f64;
+    let words = words_for(n_states) as f64;
+    Cost::new(
+        n.powi(3) * (16.0 * words + 12.0),
+        n.powi(4) * words * CLOSURE_SECONDS_PER_UNIT,
+    )
+}
 
 /// A ternary constraint network over named points.
 ///
@@ -87,24 +107,14 @@ impl Network {
                 ));
             }
         }
-        let n = names.len() as u64;
-        let words = words_for(calculus.n_states());
-        // Per ordered triplet: its set, closure's transposed copy of it (one-word calculi) and
-        // a provenance record. Measured peak at 200 points (double-cross, `qrm reason close`):
-        // 238 MB against this 224 MB; the output is streamed, not held (issue 39: the whole
-        // JSON value of a 100-point result took 1.3 GB where this said 20 MB).
-        let bytes = n.saturating_pow(3).saturating_mul(16 * words as u64 + 12);
-        if bytes > MAX_NETWORK_BYTES {
-            return Err(network_error(
-                "points",
-                format!(
-                    "{n} points need about {:.1} GiB (n³ ordered triplets); the limit is {} GiB",
-                    bytes as f64 / f64::from(1u32 << 30),
-                    MAX_NETWORK_BYTES >> 30
-                ),
-            ));
-        }
         let n = names.len();
+        let words = words_for(calculus.n_states());
+        closure_cost(n, calculus.n_states())
+            .check(
+                &Budget::RUN,
+                format!("{n} points (n³ ordered triplets, each closed against n fourth points)"),
+            )
+            .map_err(|e| network_error("points", e.hint("fewer points").to_string()))?;
         let mut sets = vec![0u64; n * n * n * words];
         let mut universal = vec![0u64; words];
         fill_universal(&mut universal, calculus.n_states());

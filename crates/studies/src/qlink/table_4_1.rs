@@ -15,6 +15,7 @@
 //! its five settings); each occlusion setting maps its own world of discs, with occlusion
 //! (the whole experiment happens in that environment).
 
+use qsr_core::cost::{Budget, Cost};
 use qsr_core::progress::{FixedTotal, Progress, phase};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
@@ -167,8 +168,6 @@ pub const SECONDS_PER_NAVIGATION: f64 = 6.4e-3;
 /// Pairs a setting with `pairs` left out is estimated at: every start/goal pair of a world,
 /// 39,800 per obstacle size in the full-scale run (issue 36's audit).
 pub const ALL_PAIRS_ESTIMATE: usize = 40_000;
-/// The most CPU time a Table 4.1 config may be estimated at (s): the studies' one limit.
-pub const MAX_CORE_SECONDS: f64 = pqrm::study::MAX_STUDY_CORE_HOURS * 3600.0;
 
 /// What the study runs.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -330,17 +329,16 @@ impl StudyConfig {
             * navigations(self.pairs)
             + (self.occlusion_schedules.len() * self.sizes.len()) as f64
                 * navigations(self.schedule_pairs.or(self.pairs));
-        let seconds = n_settings * SECONDS_PER_NAVIGATION / self.step;
-        if seconds > MAX_CORE_SECONDS {
-            return bad(format!(
-                "about {n_settings:.2e} navigations at step = {} m, ≈ {:.0} core-hours ({:.1} ms \
-                 each at 1 m, measured); the limit is {:.0} core-hours: fewer pairs or \
-                 schedule_pairs, fewer sizes or range_factors, or a longer step",
-                self.step,
-                seconds / 3600.0,
-                SECONDS_PER_NAVIGATION * 1e3,
-                MAX_CORE_SECONDS / 3600.0
-            ));
+        if let Err(e) = Cost::work(n_settings / self.step, SECONDS_PER_NAVIGATION).check(
+            &Budget::RUN,
+            format!("{n_settings:.2e} navigations at step = {} m", self.step),
+        ) {
+            return bad(e
+                .hint(
+                    "fewer pairs or schedule_pairs, fewer sizes or range_factors, or a longer \
+                     step",
+                )
+                .to_string());
         }
         let main = |trial: Trial, value: f64| Setting {
             trial,

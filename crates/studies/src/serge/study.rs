@@ -1,6 +1,7 @@
 //! The SERGE study of thesis §3.4 as a [`Study`]: per dataset, one shard per fold of the
 //! cross-validation and one for the example maps and the dataset's use case.
 
+use qsr_core::cost::{Budget, Cost};
 use qsr_core::progress::Progress;
 use serde::{Deserialize, Serialize};
 
@@ -72,8 +73,6 @@ pub const MAX_MU: usize = 10_000;
 /// --quick` (4.0 × 10⁶ units: 3 datasets × 6 × 8 searches × 5 × (2,000 + 60²)) took 2.7 s of
 /// CPU.
 pub const SECONDS_PER_UNIT: f64 = 6.7e-7;
-/// The most CPU time a config may be estimated at (s): the studies' one limit.
-pub const MAX_CORE_SECONDS: f64 = pqrm::study::MAX_STUDY_CORE_HOURS * 3600.0;
 
 fn check(config: &StudyConfig) -> Result<()> {
     if config.datasets.is_empty() {
@@ -123,17 +122,25 @@ fn check(config: &StudyConfig) -> Result<()> {
         * searches as f64
         * config.trials_per_belief as f64
         * (config.samples as f64 + (config.grid as f64).powi(2));
-    let seconds = work * SECONDS_PER_UNIT;
-    if seconds > MAX_CORE_SECONDS {
-        return Err(StudyError::InvalidParameter(format!(
-            "about {:.0} core-hours (datasets × (folds + 1) × searches × trials_per_belief × \
-             (samples + grid²) = {work:.2e} at {:.2} µs each, measured); the limit is {:.0}: \
-             fewer folds, trials, samples or a coarser grid",
-            seconds / 3600.0,
-            SECONDS_PER_UNIT * 1e6,
-            MAX_CORE_SECONDS / 3600.0
-        )));
-    }
+    Cost::work(work, SECONDS_PER_UNIT)
+        .check(
+            &Budget::RUN,
+            format!(
+                "datasets × (folds + 1) × searches × trials_per_belief × (samples + grid²) = \
+                 {} × {} × {searches} × {} × ({} + {}²) = {work:.2e} units",
+                config.datasets.len(),
+                config.folds + 1,
+                config.trials_per_belief,
+                config.samples,
+                config.grid
+            ),
+        )
+        .map_err(|e| {
+            StudyError::InvalidParameter(
+                e.hint("fewer folds, trials, samples or a coarser grid")
+                    .to_string(),
+            )
+        })?;
     let sigma_ok = |s: &f64| s.is_finite() && *s >= 0.0;
     if !sigma_ok(&config.sigma_for_mu) {
         return Err(StudyError::InvalidParameter(format!(
