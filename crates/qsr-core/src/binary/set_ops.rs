@@ -56,6 +56,11 @@ pub(crate) struct SetOps {
     universal_closed: bool,
     /// Weight of each base relation.
     weights: Vec<u32>,
+    /// For few blocks ([`DENSE_BLOCKS`]): per base relation `s`, the blocks of every left set
+    /// composed with `s` alone — `by_right[((s · nb + kl) · V + vl) · words ..]` — the block
+    /// table's entries for a fixed single right input, gathered from `compose`'s stride so a
+    /// closure composing many left sets with one single right set reads them in order.
+    by_right: Vec<u64>,
 }
 
 fn set_bit(words: &mut [u64], i: usize) {
@@ -130,6 +135,20 @@ impl SetOps {
                 }
             }
         }
+        let mut by_right = Vec::new();
+        if n_blocks <= DENSE_BLOCKS {
+            by_right = vec![0u64; n * n_blocks * v_count * words];
+            for s in 0..n {
+                let (kr, vr) = (s / block, 1usize << (s % block));
+                for kl in 0..n_blocks {
+                    for vl in 0..v_count {
+                        let to = ((s * n_blocks + kl) * v_count + vl) * words;
+                        by_right[to..to + words]
+                            .copy_from_slice(&compose[at(kl, vl, kr, vr)..][..words]);
+                    }
+                }
+            }
+        }
         let mut conv = vec![0u64; n_blocks * v_count * words];
         for k in 0..n_blocks {
             for v in 1..v_count {
@@ -176,6 +195,7 @@ impl SetOps {
             left_total,
             right_total,
             weights: weights.to_vec(),
+            by_right,
         }
     }
 
@@ -197,6 +217,7 @@ impl SetOps {
         let (compose, _) = self.compose.as_chunks::<W>();
         let (converse, _) = self.converse.as_chunks::<W>();
         let (base, _) = self.base.as_chunks::<W>();
+        let (by_right, _) = self.by_right.as_chunks::<W>();
         let one = |v: &[u64]| -> Option<[u64; W]> { v.try_into().ok() };
         Some(SetView {
             block: self.block,
@@ -210,6 +231,7 @@ impl SetOps {
             compose,
             converse,
             base,
+            by_right,
             n_states: self.n_states,
             universal: one(&self.universal)?,
             left_total: one(&self.left_total)?,
@@ -230,12 +252,19 @@ pub(crate) struct SetView<'a, const W: usize> {
     compose: &'a [[u64; W]],
     converse: &'a [[u64; W]],
     base: &'a [[u64; W]],
+    by_right: &'a [[u64; W]],
     n_states: usize,
     pub(crate) universal: [u64; W],
     left_total: [u64; W],
     right_total: [u64; W],
     pub(crate) weights: &'a [u32],
     unit_weights: bool,
+}
+
+/// `x ∪ y`.
+#[inline]
+fn or<const W: usize>(x: &[u64; W], y: &[u64; W]) -> [u64; W] {
+    std::array::from_fn(|i| x[i] | y[i])
 }
 
 /// Calls `f(block, value)` for each non-empty block of `set`.
@@ -361,6 +390,97 @@ impl<const W: usize> SetView<'_, W> {
             !covers(&acc, target)
         });
         (!covered && !covers(&acc, target)).then_some(acc)
+    }
+
+    /// `r ∘ s` of two base relations.
+    #[inline(always)]
+    pub(crate) fn base_at(&self, r: usize, s: usize) -> [u64; W] {
+        self.base[r * self.n_states + s]
+    }
+
+    /// With few blocks, the block table's entries for the left set `left` fixed: `left ∘ X`
+    /// for any set `X` is the union of one entry per block of `X` ([`Self::through`]). A set
+    /// within one block (every single relation) is a slice of the block table; one spanning
+    /// blocks is the union of theirs, written to `buf` (at most [`DENSE_BLOCKS`] slices).
+    /// `None` with many blocks.
+    pub(crate) fn fixed_left<'b>(
+        &'b self,
+        left: &[u64; W],
+        buf: &'b mut Vec<[u64; W]>,
+    ) -> Option<&'b [[u64; W]]> {
+        let (nb, vc) = (self.n_blocks, self.v_count);
+        if nb > DENSE_BLOCKS {
+            return None;
+        }
+        let region = |k: usize| {
+            let bit = k * self.block;
+            let v = ((left[bit / 64] >> (bit % 64)) & self.mask) as usize;
+            (v != 0).then(|| &self.compose[(k * vc + v) * nb * vc..][..nb * vc])
+        };
+        let mut regions = (0..nb).filter_map(region);
+        let first = regions.next()?;
+        let Some(second) = regions.next() else {
+            return Some(first);
+        };
+        buf.clear();
+        buf.extend(first.iter().zip(second).map(|(x, y)| or(x, y)));
+        for r in regions {
+            for (d, x) in buf.iter_mut().zip(r) {
+                *d = or(d, x);
+            }
+        }
+        Some(buf)
+    }
+
+    /// As [`Self::fixed_left`] for the right set `right` fixed (`X ∘ right` through
+    /// [`Self::through`]): the union of its relations' gathered entries, when it has at most
+    /// `max_relations` (each costs a pass over the entries); `None` otherwise.
+    pub(crate) fn fixed_right<'b>(
+        &'b self,
+        right: &[u64; W],
+        max_relations: usize,
+        buf: &'b mut Vec<[u64; W]>,
+    ) -> Option<&'b [[u64; W]]> {
+        let (nb, vc) = (self.n_blocks, self.v_count);
+        if nb > DENSE_BLOCKS || self.by_right.is_empty() {
+            return None;
+        }
+        let count: u32 = right.iter().map(|w| w.count_ones()).sum();
+        if count == 0 || count as usize > max_relations {
+            return None;
+        }
+        let mut states = crate::reason::iter_bits(right).map(|s| s.index());
+        let entries = |s: usize| &self.by_right[s * nb * vc..][..nb * vc];
+        let first = entries(states.next()?);
+        if count == 1 {
+            return Some(first);
+        }
+        buf.clear();
+        buf.extend_from_slice(first);
+        for s in states {
+            for (d, x) in buf.iter_mut().zip(entries(s)) {
+                *d = or(d, x);
+            }
+        }
+        Some(buf)
+    }
+
+    /// The composition of `set` with the single relation whose entries `entries` are (from
+    /// [`Self::left_single`] or [`Self::right_single`]): one lookup per block, no branch.
+    #[inline(always)]
+    pub(crate) fn through(&self, entries: &[[u64; W]], set: &[u64; W]) -> [u64; W] {
+        let look = |k: usize| {
+            let bit = k * self.block;
+            let v = ((set[bit / 64] >> (bit % 64)) & self.mask) as usize;
+            &entries[k * self.v_count + v]
+        };
+        // Unrolled: the entries exist only for at most DENSE_BLOCKS blocks, and this is the
+        // innermost loop of ternary closure (a loop over a run-time block count cost a fifth).
+        match self.n_blocks {
+            1 => *look(0),
+            2 => or(look(0), look(1)),
+            _ => or(&or(look(0), look(1)), look(2)),
+        }
     }
 
     /// The weight of a set: the sum of its relations' weights (GQR's queue key).

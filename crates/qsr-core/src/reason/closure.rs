@@ -353,7 +353,24 @@ struct Proposal {
     target: u32,
     left: u32,
     right: u32,
-    allowed: Vec<u64>,
+    allowed: Allowed,
+}
+
+/// A proposal's set: one word inline (EDC and every built-in calculus — a first round over a
+/// half-known network proposes millions, and a heap allocation each cost more than the
+/// compositions), wider sets on the heap.
+enum Allowed {
+    One([u64; 1]),
+    Many(Box<[u64]>),
+}
+
+impl Allowed {
+    fn words(&self) -> &[u64] {
+        match self {
+            Self::One(w) => w,
+            Self::Many(w) => w,
+        }
+    }
 }
 
 struct Propagation {
@@ -435,7 +452,7 @@ impl Propagation {
                     if self.refine(
                         net,
                         target,
-                        &p.allowed,
+                        p.allowed.words(),
                         Reason::Composition(p.left, p.right),
                     )? {
                         let canon = canonical(net, target);
@@ -464,11 +481,23 @@ impl Propagation {
         if cur.iter().zip(allowed).all(|(c, a)| c & !a == 0) {
             return Ok(false);
         }
-        let before = cur.to_vec();
-        let mut empty = true;
+        // Only a contradiction needs the set as it was (no allocation per refinement).
+        if cur.iter().zip(allowed).all(|(c, a)| c & a == 0) {
+            let before = cur.to_vec();
+            net.words_at_mut(target).fill(0);
+            self.stats.refinements += 1;
+            if let Some(r) = &mut self.reasons {
+                r[target] = reason;
+            }
+            return Err(Emptied {
+                target,
+                before,
+                allowed: allowed.to_vec(),
+                reason,
+            });
+        }
         for (c, a) in net.words_at_mut(target).iter_mut().zip(allowed) {
             *c &= a;
-            empty &= *c == 0;
         }
         self.stats.refinements += 1;
         if let Some(t) = &mut self.transposed {
@@ -477,14 +506,6 @@ impl Propagation {
         }
         if let Some(r) = &mut self.reasons {
             r[target] = reason;
-        }
-        if empty {
-            return Err(Emptied {
-                target,
-                before,
-                allowed: allowed.to_vec(),
-                reason,
-            });
         }
         Ok(true)
     }
@@ -560,7 +581,7 @@ fn compositions(
                     target: target as u32,
                     left: pqr as u32,
                     right: right as u32,
-                    allowed: out.clone(),
+                    allowed: Allowed::Many(out.as_slice().into()),
                 });
             }
             if !both {
@@ -573,7 +594,7 @@ fn compositions(
                     target: target as u32,
                     left: left as u32,
                     right: pqr as u32,
-                    allowed: out.clone(),
+                    allowed: Allowed::Many(out.as_slice().into()),
                 });
             }
         }
@@ -581,8 +602,18 @@ fn compositions(
     proposals
 }
 
+/// The most relations a fixed right input is gathered for ([`SetView::fixed_right`]: a pass
+/// over the block entries each; past it, each composition reads the block table).
+const FIXED_RIGHT_MAX: usize = 4;
+
 /// [`compositions`] for sets of one word, composed by the block tables (EDC and every
 /// built-in calculus): the same rules in the same order, so the same proposals.
+///
+/// The innermost loop of every closure, so written for its common case: one input of every
+/// rule here is the triplet's own set, fixed over the fourth point `w`, and in a map's network
+/// most sets are single states — then `r ∘ s` is one entry of the base table's row (or
+/// column) for the fixed state, read by index with no set-shape tests. Rows of the network
+/// (`{p,q:w}` over `w`) are read as slices, without a bounds check per point.
 fn compositions_one_word(
     net: &Network,
     transposed: Option<&[u64]>,
@@ -594,23 +625,63 @@ fn compositions_one_word(
     let [a, b, c] = net.triplet(canon);
     let sets = net.one_word_sets();
     let mut proposals = Vec::new();
+    let (mut left_buf, mut right_buf) = (Vec::new(), Vec::new());
+    // The composition when it refines `target`. With the triplet's own set a single state,
+    // one lookup per block of the other input (no test of its shape); otherwise the blocks.
+    let single = |x: u64| (x != 0 && x & (x - 1) == 0).then(|| x.trailing_zeros() as usize);
+    // The composition when it refines `target`: two single states by the base table (a
+    // scenario's every instance); the triplet's own set fixed by its block entries, one lookup
+    // per block of the other input; otherwise the blocks of both.
+    let refining = |entries: Option<&[[u64; 1]]>,
+                    given_single: Option<usize>,
+                    other: u64,
+                    fixed: u64,
+                    fixed_left: bool,
+                    target: u64| {
+        let acc = match (given_single.zip(single(other)), entries) {
+            (Some((g, o)), _) if fixed_left => view.base_at(g, o)[0],
+            (Some((g, o)), _) => view.base_at(o, g)[0],
+            (None, Some(e)) => view.through(e, &[other])[0],
+            (None, None) if fixed_left => {
+                return view
+                    .composition_refining(&[fixed], &[other], &[target])
+                    .map(|o| o[0]);
+            }
+            (None, None) => {
+                return view
+                    .composition_refining(&[other], &[fixed], &[target])
+                    .map(|o| o[0]);
+            }
+        };
+        (target & !acc != 0).then_some(acc)
+    };
     for (p, q, r) in processing_order(a, b, c) {
         let pqr = net.index(p, q, r);
-        let given = [sets[pqr]];
+        let given = sets[pqr];
         // Index strides: {p,q:w} = pq + w, {q,r:w} = qr + w, {w,p:r} = w·n² + pr,
         // {w,p:q} = w·n² + pq'.
         let (pq, qr) = (net.index(p, q, 0), net.index(q, r, 0));
         let (wpr, wpq) = (net.index(0, p, r), net.index(0, p, q));
         let nn = n * n;
-        for w in (0..n).filter(|&w| w != a && w != b && w != c) {
+        let (targets, rights) = (&sets[pq..pq + n], &sets[qr..qr + n]);
+        let given_single = single(given);
+        let row = view.fixed_left(&[given], &mut left_buf);
+        let col = if both {
+            view.fixed_right(&[given], FIXED_RIGHT_MAX, &mut right_buf)
+        } else {
+            None
+        };
+        for w in 0..n {
+            if w == a || w == b || w == c {
+                continue;
+            }
             // {p,q:w} ⊆ {p,q:r} ∘ {q,r:w}
-            let (target, right) = (pq + w, qr + w);
-            if let Some(out) = view.composition_refining(&given, &[sets[right]], &[sets[target]]) {
+            if let Some(acc) = refining(row, given_single, rights[w], given, true, targets[w]) {
                 proposals.push(Proposal {
-                    target: target as u32,
+                    target: (pq + w) as u32,
                     left: pqr as u32,
-                    right: right as u32,
-                    allowed: out.to_vec(),
+                    right: (qr + w) as u32,
+                    allowed: Allowed::One([acc]),
                 });
             }
             if !both {
@@ -622,12 +693,12 @@ fn compositions_one_word(
                 Some(t) => (t[wpq * n + w], t[wpr * n + w]),
                 None => (sets[left], sets[target]),
             };
-            if let Some(out) = view.composition_refining(&[left_set], &given, &[target_set]) {
+            if let Some(acc) = refining(col, given_single, left_set, given, false, target_set) {
                 proposals.push(Proposal {
                     target: target as u32,
                     left: left as u32,
                     right: pqr as u32,
-                    allowed: out.to_vec(),
+                    allowed: Allowed::One([acc]),
                 });
             }
         }
