@@ -294,7 +294,7 @@ fn for_blocks<const W: usize>(
 
 /// The relation of a set holding exactly one.
 #[inline]
-fn single<const W: usize>(set: &[u64; W]) -> Option<usize> {
+pub(crate) fn single<const W: usize>(set: &[u64; W]) -> Option<usize> {
     let mut found = None;
     for (i, &w) in set.iter().enumerate() {
         if w != 0 {
@@ -466,7 +466,7 @@ impl<const W: usize> SetView<'_, W> {
     }
 
     /// The composition of `set` with the single relation whose entries `entries` are (from
-    /// [`Self::left_single`] or [`Self::right_single`]): one lookup per block, no branch.
+    /// [`Self::fixed_left`] or [`Self::fixed_right`]): one lookup per block, no branch.
     #[inline(always)]
     pub(crate) fn through(&self, entries: &[[u64; W]], set: &[u64; W]) -> [u64; W] {
         let look = |k: usize| {

@@ -26,6 +26,7 @@
 
 use rayon::prelude::*;
 
+use crate::binary::set_ops::SetView;
 use crate::error::QsrError;
 use crate::permute::{Permutation, all_orderings};
 use crate::reason::algebra::Algebra;
@@ -602,22 +603,22 @@ fn compositions(
     proposals
 }
 
-/// The most relations a fixed right input is gathered for ([`SetView::fixed_right`]: a pass
-/// over the block entries each; past it, each composition reads the block table).
+/// The most relations a fixed right input is gathered for ([`SetView::fixed_right`]: a
+/// pass over the block entries each; past it, each composition reads the block table).
 const FIXED_RIGHT_MAX: usize = 4;
 
 /// [`compositions`] for sets of one word, composed by the block tables (EDC and every
 /// built-in calculus): the same rules in the same order, so the same proposals.
 ///
 /// The innermost loop of every closure, so written for its common case: one input of every
-/// rule here is the triplet's own set, fixed over the fourth point `w`, and in a map's network
-/// most sets are single states — then `r ∘ s` is one entry of the base table's row (or
-/// column) for the fixed state, read by index with no set-shape tests. Rows of the network
-/// (`{p,q:w}` over `w`) are read as slices, without a bounds check per point.
+/// rule here is the triplet's own set, fixed over the fourth point `w`. Its block-table entries
+/// are taken once ([`SetView::fixed_left`], [`SetView::fixed_right`]), so each composition
+/// is one lookup per block of the other input; two single states read the base table. Rows of the
+/// network (`{p,q:w}` over `w`) are read as slices, without a bounds check per point.
 fn compositions_one_word(
     net: &Network,
     transposed: Option<&[u64]>,
-    view: &crate::binary::set_ops::SetView<'_, 1>,
+    view: &SetView<'_, 1>,
     canon: usize,
     both: bool,
 ) -> Vec<Proposal> {
@@ -626,9 +627,7 @@ fn compositions_one_word(
     let sets = net.one_word_sets();
     let mut proposals = Vec::new();
     let (mut left_buf, mut right_buf) = (Vec::new(), Vec::new());
-    // The composition when it refines `target`. With the triplet's own set a single state,
-    // one lookup per block of the other input (no test of its shape); otherwise the blocks.
-    let single = |x: u64| (x != 0 && x & (x - 1) == 0).then(|| x.trailing_zeros() as usize);
+    let single = |x: u64| crate::binary::set_ops::single(&[x]);
     // The composition when it refines `target`: two single states by the base table (a
     // scenario's every instance); the triplet's own set fixed by its block entries, one lookup
     // per block of the other input; otherwise the blocks of both.
