@@ -24,6 +24,10 @@ pub struct DemoArgs {
     /// R = 30 m, and arcs and search circles run at R as in the thesis.
     #[arg(long, default_value_t = 30.0)]
     pub nav_range: f64,
+    /// Idealised navigating robot: true detections and exact driving (default: one that
+    /// errs — the site's detection noise N(0, 0.7 m), missed detections, wheel slip).
+    #[arg(long)]
+    pub exact_robot: bool,
     /// Output directory.
     #[arg(long, default_value = "out/demo")]
     pub out: PathBuf,
@@ -35,6 +39,8 @@ pub fn run(a: DemoArgs) -> Result<()> {
         seed: a.seed.unwrap_or(<Demo as studies::Study>::DEFAULT_SEED),
         goal: a.goal,
         nav_range: a.nav_range,
+        exact_robot: a.exact_robot,
+        ..DemoConfig::new(a.seed.unwrap_or(<Demo as studies::Study>::DEFAULT_SEED))
     };
     crate::study_cmd::run_study_shown::<Demo>(&config, &a.out, Shown::Story)
 }

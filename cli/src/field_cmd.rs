@@ -15,6 +15,10 @@ pub struct FieldArgs {
     /// (default 5; quick: 1). Rates are reported per world and pooled.
     #[arg(long)]
     pub worlds: Option<usize>,
+    /// Idealised: the navigating robot drives its waypoints exactly (default: with wheel
+    /// slip; its detections are the lidar pipeline's either way).
+    #[arg(long)]
+    pub exact_robot: bool,
     /// --quick, --seed, --out.
     #[command(flatten)]
     pub run: StudyFlags,
@@ -30,5 +34,6 @@ pub fn run(a: FieldArgs) -> Result<()> {
     if let Some(n) = a.worlds {
         config.worlds = n;
     }
+    config.exact_robot |= a.exact_robot;
     crate::study_cmd::run_study::<FieldExperiment>(&config, &a.run.out)
 }

@@ -52,6 +52,11 @@ pub struct StudyArgs {
     /// robot's R, as the thesis drives them).
     #[arg(long)]
     pub arcs_at_sensor_range: bool,
+    /// Idealised: the navigating robot detects true positions and drives its waypoints
+    /// exactly (default: it errs — N(0, 0.3 m) detections, MRCLAM's miss rate, wheel slip;
+    /// change them with `qrm study run table-4-1 --set robot.detection.sigma=…`).
+    #[arg(long)]
+    pub exact_robot: bool,
     /// --quick, --seed, --out.
     #[command(flatten)]
     pub run: StudyFlags,
@@ -86,5 +91,6 @@ fn study(a: StudyArgs) -> Result<()> {
     if a.arcs_at_sensor_range {
         config.radius = ArcRadius::SensorRange;
     }
+    config.exact_robot |= a.exact_robot;
     crate::study_cmd::run_study::<Table41>(&config, &a.run.out)
 }

@@ -35,10 +35,19 @@ def test_navigation_on_a_pqrm_built_from_python():
 
 
 def test_the_quick_study_keeps_proposition_1():
-    res = qrm.qlink_study("sensor-range", quick=True, pairs=30, seed=3)
+    # Proposition 1 is about a robot that sees and drives exactly
+    res = qrm.qlink_study("sensor-range", quick=True, pairs=30, seed=3, exact_robot=True)
     rows = {r["value"]: r for r in res["table"]}
     assert rows[1.0]["failures"] == 0
     assert len(res["records"]) == 30 * 5
+
+
+def test_the_erring_robot_is_the_default_and_its_seed_matters():
+    a = qrm.navigate(POSTS, 1, 9, calculus="quadrant", range=12.0)
+    b = qrm.navigate(POSTS, 1, 9, calculus="quadrant", range=12.0, seed=1)
+    x = qrm.navigate(POSTS, 1, 9, calculus="quadrant", range=12.0, exact_robot=True)
+    assert a == qrm.navigate(POSTS, 1, 9, calculus="quadrant", range=12.0)
+    assert a["trajectory"] != b["trajectory"] and a["trajectory"] != x["trajectory"]
 
 
 def test_bad_input():

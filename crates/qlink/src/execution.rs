@@ -17,9 +17,20 @@
 //! displacement scaled by `1 + scale_error` and rotated by `heading_error`. A landmark last
 //! seen at `p_L` from `p_then` is believed, from `p_now`, to be at
 //! `p_L + Δ − (1 + s)·Rot(θ)·Δ` with `Δ = p_now − p_then`: its error grows linearly with the
-//! distance driven since it was last seen, and vanishes when it is seen again. The robot
-//! drives its waypoints exactly; the drift lives in where it believes the references are,
-//! which is where it decides and plans its arcs.
+//! distance driven since it was last seen, and vanishes when it is seen again.
+//!
+//! What the robot's detector and wheels get wrong besides is its [`crate::Robot`]: noisy,
+//! missed (and optionally false) detections, and random motion error its odometry does not
+//! see. The walker below keeps both where the robot is and where it believes it is; every
+//! decision is made in the believed frame from what was detected. A path is planned around
+//! anchor landmarks (a frame's references, a circled landmark), and a robot whose wheels
+//! err moves the rest of its path with them whenever it senses them — a steady-state Kalman
+//! filter of its drift, so that noisy detections do not jerk it about. It looks three times
+//! where it stands before it localises (one look misses a landmark in five at MRCLAM's
+//! rate), and circles a landmark it must keep in view inside its range by
+//! [`crate::Robot::margin`]. The exact robot ([`crate::Robot::EXACT`]) does none of this and
+//! drives as the navigator did before the robot could err, bit for bit
+//! (`tests/erring_robot.rs`).
 
 use std::collections::HashMap;
 
@@ -27,6 +38,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::error::{QlinkError, Result};
 use crate::perception::{Perception, distance as d};
+use crate::robot::Robot;
 
 /// Systematic odometry error.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -174,18 +186,30 @@ pub(crate) enum Leg {
     Circle { step_deg: f64 },
 }
 
-/// The last sighting of a landmark: its measured position and where the robot was.
+/// The last sighting of a landmark: where it was measured and where the robot believed it
+/// was then (both in the robot's believed frame).
 #[derive(Debug, Clone, Copy)]
 struct Sighting {
     at: [f64; 2],
     from: [f64; 2],
 }
 
-/// The robot as it drives: position, distance, trajectory, and what it remembers of the
-/// landmarks it watches.
+/// The robot as it drives: where it is and where it believes it is, distance, trajectory,
+/// what it detects from here and what it remembers of the landmarks it watches.
+///
+/// Positions the navigator works with — detections, remembered landmarks, waypoints — are in
+/// the robot's *believed* frame ([`Walker::here`] is its origin's position in it); the
+/// trajectory and length are what the robot truly drove. For a robot with exact motion the
+/// two frames are one and no conversion is made (so the exact robot's numbers are the
+/// navigator's before it could err, bit for bit).
 pub(crate) struct Walker<'p, P: Perception> {
     pub(crate) perception: &'p P,
-    pub(crate) pos: [f64; 2],
+    /// Where the robot truly is.
+    pos: [f64; 2],
+    /// Where its odometry says it is.
+    odo: [f64; 2],
+    /// The rotation from the believed frame's directions to the world's (rad).
+    heading: f64,
     pub(crate) length: f64,
     pub(crate) trajectory: Vec<[f64; 2]>,
     /// Index ranges of `trajectory` spent searching (see `NavOutcome::searches`).
@@ -195,6 +219,16 @@ pub(crate) struct Walker<'p, P: Perception> {
     pub(crate) record: bool,
     watched: Vec<u32>,
     memory: HashMap<u32, Sighting>,
+    robot: Robot,
+    /// This run's key for the robot's draws.
+    run: u64,
+    /// Scans made (a scan is one place sensed from), steps driven.
+    scans: u64,
+    steps: u64,
+    /// Moved since the last scan: the next question is a new scan.
+    moved: bool,
+    /// This scan's answers: id and the detected position, if any.
+    scan: HashMap<u32, Option<[f64; 2]>>,
 }
 
 impl<'p, P: Perception> Walker<'p, P> {
@@ -204,10 +238,14 @@ impl<'p, P: Perception> Walker<'p, P> {
         step: f64,
         sensing: Sensing,
         record: bool,
+        robot: Robot,
+        run: u64,
     ) -> Self {
         Self {
             perception,
             pos: start,
+            odo: start,
+            heading: 0.0,
             length: 0.0,
             trajectory: vec![start],
             searches: Vec::new(),
@@ -216,21 +254,144 @@ impl<'p, P: Perception> Walker<'p, P> {
             record,
             watched: Vec::new(),
             memory: HashMap::new(),
+            robot,
+            run,
+            scans: 0,
+            steps: 0,
+            moved: false,
+            scan: HashMap::new(),
         }
+    }
+
+    /// Where the robot believes it is: the origin of every position it works with.
+    pub(crate) fn here(&self) -> [f64; 2] {
+        self.odo
+    }
+
+    /// Where the robot truly is (for reports, never for decisions).
+    pub(crate) fn truly(&self) -> [f64; 2] {
+        self.pos
+    }
+
+    /// A world point in the believed frame (the identity for exact motion).
+    fn believed(&self, p: [f64; 2]) -> [f64; 2] {
+        if self.robot.motion.is_exact() {
+            return p;
+        }
+        let (s, c) = self.heading.sin_cos();
+        let v = [p[0] - self.pos[0], p[1] - self.pos[1]];
+        [
+            self.odo[0] + c * v[0] + s * v[1],
+            self.odo[1] - s * v[0] + c * v[1],
+        ]
+    }
+
+    /// Starts a new scan if the robot moved since the last question.
+    fn fresh_scan(&mut self) {
+        if self.moved {
+            self.moved = false;
+            self.scans += 1;
+            self.scan.clear();
+        }
+    }
+
+    /// What the detector reports for `id` from here: its measured position (believed
+    /// frame), or `None`.
+    pub(crate) fn detect(&mut self, id: u32) -> Option<[f64; 2]> {
+        self.fresh_scan();
+        if let Some(&at) = self.scan.get(&id) {
+            return at;
+        }
+        let truly = self.perception.sees(self.pos, id);
+        let at = self.report(id, truly);
+        self.scan.insert(id, at);
+        at
+    }
+
+    /// The detector's report on `id`, which it truly detects or not (believed frame).
+    fn report(&self, id: u32, truly: bool) -> Option<[f64; 2]> {
+        self.robot
+            .report(self.perception, self.pos, id, truly, [self.run, self.scans])
+            .map(|p| self.believed(p))
+    }
+
+    /// Whether `id` is reported from here.
+    pub(crate) fn sees(&mut self, id: u32) -> bool {
+        self.detect(id).is_some()
+    }
+
+    /// Takes another look from where the robot stands: a new scan, whose misses and noise are
+    /// drawn afresh (a detector's next frame).
+    pub(crate) fn look(&mut self) {
+        self.moved = true;
+        self.fresh_scan();
+    }
+
+    /// Every landmark reported from here on any of `looks` scans (the current one and
+    /// `looks − 1` more), sorted: what a robot standing still for a moment sees. It
+    /// remembers where it saw each (so a landmark missed on the last look is still placed).
+    pub(crate) fn visible_over(&mut self, looks: usize) -> Vec<u32> {
+        let mut out = self.visible();
+        if self.robot.detection.is_exact() {
+            return out;
+        }
+        for k in 0..looks {
+            if k > 0 {
+                self.look();
+                out.extend(self.visible());
+            }
+            for (&id, at) in &self.scan {
+                if let Some(at) = *at {
+                    self.memory.insert(id, Sighting { at, from: self.odo });
+                }
+            }
+        }
+        out.sort_unstable();
+        out.dedup();
+        out
+    }
+
+    /// Every landmark reported from here, sorted.
+    pub(crate) fn visible(&mut self) -> Vec<u32> {
+        let truly = self.perception.visible(self.pos);
+        if self.robot.detection.is_exact() {
+            return truly;
+        }
+        self.fresh_scan();
+        let candidates = if self.robot.detection.false_rate > 0.0 {
+            self.perception.ids()
+        } else {
+            truly.clone()
+        };
+        let mut out = Vec::new();
+        for id in candidates {
+            let at = match self.scan.get(&id) {
+                Some(&at) => at,
+                None => {
+                    let at = self.report(id, truly.binary_search(&id).is_ok());
+                    self.scan.insert(id, at);
+                    at
+                }
+            };
+            if at.is_some() {
+                out.push(id);
+            }
+        }
+        out.sort_unstable();
+        out
     }
 
     /// Remember `ids` whenever they are sensed from now on (and now).
     pub(crate) fn watch(&mut self, ids: &[u32]) {
         self.watched = ids.to_vec();
-        self.sense_watched(self.pos);
+        self.sense_watched();
     }
 
-    fn sense_watched(&mut self, x: [f64; 2]) {
-        for &id in &self.watched {
-            if self.perception.sees(x, id)
-                && let Some(at) = self.perception.position(id)
-            {
-                self.memory.insert(id, Sighting { at, from: x });
+    fn sense_watched(&mut self) {
+        for i in 0..self.watched.len() {
+            let id = self.watched[i];
+            if let Some(at) = self.detect(id) {
+                self.memory.insert(id, Sighting { at, from: self.odo });
             }
         }
     }
@@ -239,30 +400,90 @@ impl<'p, P: Perception> Walker<'p, P> {
     /// remembered and carried forward; `None` when it has no measurement to go on.
     pub(crate) fn place(&mut self, id: u32, references: References) -> Option<[f64; 2]> {
         match references {
-            References::Oracle => self.perception.position(id),
+            References::Oracle => self.perception.position(id).map(|p| self.believed(p)),
             References::Perceived(odometry) => {
-                if self.perception.sees(self.pos, id)
-                    && let Some(at) = self.perception.position(id)
-                {
-                    self.memory.insert(id, Sighting { at, from: self.pos });
+                if let Some(at) = self.detect(id) {
+                    self.memory.insert(id, Sighting { at, from: self.odo });
                     return Some(at);
                 }
                 self.memory
                     .get(&id)
-                    .map(|s| odometry.carry(s.at, s.from, self.pos))
+                    .map(|s| odometry.carry(s.at, s.from, self.odo))
             }
         }
     }
 
-    /// Follows waypoints, sensing where the schedule says and asking `stop` there; true when
-    /// it stopped. The robot always senses where it stands before it moves.
+    /// One step towards `p` (believed frame): exactly there, or as the wheels take it.
+    fn drive(&mut self, p: [f64; 2]) {
+        self.moved = true;
+        if self.robot.motion.is_exact() {
+            self.length += d(self.pos, p);
+            self.pos = p;
+            self.odo = p;
+            return;
+        }
+        let delta = [p[0] - self.odo[0], p[1] - self.odo[1]];
+        self.odo = p;
+        if delta == [0.0, 0.0] {
+            return;
+        }
+        self.steps += 1;
+        let done = self.robot.step(delta, self.heading, [self.run, self.steps]);
+        self.heading = done.heading;
+        self.pos = [self.pos[0] + done.moved[0], self.pos[1] + done.moved[1]];
+        self.length += done.length;
+    }
+
+    /// Moves the plan's `frame` towards where the `anchor` landmarks (ids and where the path
+    /// was planned with them) are detected now; unchanged when none is.
+    fn reanchor(&mut self, anchor: &[(u32, [f64; 2])], frame: &mut Frame) {
+        let seen: Vec<([f64; 2], [f64; 2])> = anchor
+            .iter()
+            .filter_map(|&(id, planned)| self.detect(id).map(|now| (planned, now)))
+            .collect();
+        let sigma = self.robot.detection.sigma;
+        let m = self.robot.motion;
+        let lever = seen
+            .iter()
+            .map(|(_, q)| d(*q, self.odo))
+            .fold(0.0, f64::max);
+        // per step: the drift's variance (heading turns the frame about the robot, moving an
+        // anchor `lever` metres away), and one measurement's
+        let drift = (m.distance_sigma.powi(2) + (m.heading_sigma * lever).powi(2)) * self.step;
+        match seen.as_slice() {
+            [] => {}
+            [(p, q)] => frame.observe_shift(*p, *q, gain(drift, sigma * sigma)),
+            [(p0, q0), (p1, q1), ..] => {
+                let span = d(*p0, *p1).max(1e-9);
+                let turn = angle(*q0, *q1) - angle(*p0, *p1);
+                let turn_drift = m.heading_sigma.powi(2) * self.step;
+                frame.observe_turn(turn, gain(turn_drift, 2.0 * sigma * sigma / (span * span)));
+                let mid = |a: [f64; 2], b: [f64; 2]| [(a[0] + b[0]) / 2.0, (a[1] + b[1]) / 2.0];
+                frame.observe_shift(
+                    mid(*p0, *p1),
+                    mid(*q0, *q1),
+                    gain(drift, sigma * sigma / 2.0),
+                );
+            }
+        }
+    }
+
+    /// Follows waypoints (believed frame), sensing where the schedule says and asking `stop`
+    /// there; true when it stopped. The robot always senses where it stands before it moves.
+    ///
+    /// The waypoints were planned around the `anchor` landmarks (ids and the positions the
+    /// plan used). A robot whose wheels err drifts from its believed frame as it drives, so
+    /// wherever it senses one of them it moves the rest of the path with them — it servos
+    /// on what it sees, as the thesis's robot plans in "the frame it perceives". A robot that
+    /// drives exactly has nothing to correct and follows the plan as given.
     pub(crate) fn walk(
         &mut self,
         path: &[[f64; 2]],
         leg: Leg,
-        stop: &mut dyn FnMut(&P, [f64; 2]) -> bool,
+        anchor: &[(u32, [f64; 2])],
+        stop: &mut dyn FnMut(&mut Self) -> bool,
     ) -> bool {
-        if stop(self.perception, self.pos) {
+        if stop(self) {
             return true;
         }
         // waypoint indices (into `path`) after which the robot senses, for the sparse schedule
@@ -273,32 +494,47 @@ impl<'p, P: Perception> Walker<'p, P> {
             (Sensing::AtStops { .. }, Leg::Command) => Some(usize::MAX),
             (Sensing::Continuous, _) => None,
         };
+        let servo = !self.robot.motion.is_exact() && !anchor.is_empty();
+        let mut frame = Frame::about(anchor.first().map_or([0.0, 0.0], |a| a.1));
         let last = path.len().saturating_sub(1);
-        for (i, &target) in path.iter().enumerate() {
-            let seg = d(self.pos, target);
+        for (i, &planned) in path.iter().enumerate() {
+            let mut target = frame.apply(planned);
+            let seg = d(self.odo, target);
             if seg == 0.0 {
                 continue;
             }
             let n = (seg / self.step).ceil().max(1.0) as usize;
-            let from = self.pos;
+            let from = self.odo;
             for k in 1..=n {
-                let t = k as f64 / n as f64;
-                let p = [
-                    from[0] + t * (target[0] - from[0]),
-                    from[1] + t * (target[1] - from[1]),
-                ];
-                self.length += d(self.pos, p);
-                self.pos = p;
+                let p = if servo {
+                    // the rest of the way to a target that may have moved, in equal steps
+                    let left = (n - k + 1) as f64;
+                    [
+                        self.odo[0] + (target[0] - self.odo[0]) / left,
+                        self.odo[1] + (target[1] - self.odo[1]) / left,
+                    ]
+                } else {
+                    let t = k as f64 / n as f64;
+                    [
+                        from[0] + t * (target[0] - from[0]),
+                        from[1] + t * (target[1] - from[1]),
+                    ]
+                };
+                self.drive(p);
                 if self.record {
-                    self.trajectory.push(p);
+                    self.trajectory.push(self.pos);
                 }
                 let senses = match every {
                     None => true,
                     Some(e) => k == n && (i == last || (e != usize::MAX && i % e == 0)),
                 };
                 if senses {
-                    self.sense_watched(p);
-                    if stop(self.perception, p) {
+                    self.sense_watched();
+                    if servo {
+                        self.reanchor(anchor, &mut frame);
+                        target = frame.apply(planned);
+                    }
+                    if stop(self) {
                         return true;
                     }
                 }
@@ -308,9 +544,98 @@ impl<'p, P: Perception> Walker<'p, P> {
     }
 }
 
+/// How a path's frame moved since it was planned, as the robot estimates it: turned by
+/// `turn` (rad) about `pivot`, then shifted by `shift`. Each sighting of an anchor moves the
+/// estimate part of the way ([`gain`]): a steady-state Kalman filter of a random walk (the
+/// drift) seen through noisy detections, so a robot with exact detections follows each
+/// sighting and one with noisy ones does not jerk its path about by their noise.
+#[derive(Debug, Clone, Copy)]
+struct Frame {
+    pivot: [f64; 2],
+    turn: f64,
+    shift: [f64; 2],
+}
+
+impl Frame {
+    fn about(pivot: [f64; 2]) -> Self {
+        Self {
+            pivot,
+            turn: 0.0,
+            shift: [0.0, 0.0],
+        }
+    }
+
+    fn apply(&self, p: [f64; 2]) -> [f64; 2] {
+        if self.turn == 0.0 && self.shift == [0.0, 0.0] {
+            return p;
+        }
+        let (s, c) = self.turn.sin_cos();
+        let v = [p[0] - self.pivot[0], p[1] - self.pivot[1]];
+        [
+            self.pivot[0] + c * v[0] - s * v[1] + self.shift[0],
+            self.pivot[1] + s * v[0] + c * v[1] + self.shift[1],
+        ]
+    }
+
+    /// Planned point `p` seen at `q`: the shift that would put it there, weighted by `k`.
+    fn observe_shift(&mut self, p: [f64; 2], q: [f64; 2], k: f64) {
+        let now = self.apply(p);
+        self.shift[0] += k * (q[0] - now[0]);
+        self.shift[1] += k * (q[1] - now[1]);
+    }
+
+    /// A measured turn of the frame, weighted by `k`.
+    fn observe_turn(&mut self, turn: f64, k: f64) {
+        let err = (turn - self.turn + std::f64::consts::PI).rem_euclid(std::f64::consts::TAU)
+            - std::f64::consts::PI;
+        self.turn += k * err;
+    }
+}
+
+/// The steady-state gain of a Kalman filter tracking a random walk of variance `q` per step
+/// through measurements of variance `r`: 1 for exact measurements.
+fn gain(q: f64, r: f64) -> f64 {
+    if r <= 0.0 {
+        return 1.0;
+    }
+    // the prior variance P solves P = (P_post) + q with P_post = P·r/(P + r)
+    let p = (q + (q * q + 4.0 * q * r).sqrt()) / 2.0;
+    p / (p + r)
+}
+
+/// The direction from `a` to `b` (rad).
+fn angle(a: [f64; 2], b: [f64; 2]) -> f64 {
+    (b[1] - a[1]).atan2(b[0] - a[0])
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_frame_filter_follows_exact_sightings_and_averages_noisy_ones() {
+        assert_eq!(gain(0.1, 0.0), 1.0);
+        // q = r: the golden ratio's conjugate
+        assert!((gain(0.5, 0.5) - 0.618_033_988_749_895).abs() < 1e-12);
+        // little drift against noisy sightings: a small step towards each
+        let k = gain(1e-4, 0.09);
+        assert!(k > 0.0 && k < 0.05, "{k}");
+        // a frame that turned by 0.1 rad about the pivot and shifted by (1, 0)
+        let mut f = Frame::about([0.0, 0.0]);
+        f.observe_turn(0.1, 1.0);
+        f.observe_shift(
+            [10.0, 0.0],
+            [11.0 + 10.0 * 0.1f64.cos() - 10.0, 10.0 * 0.1f64.sin()],
+            1.0,
+        );
+        let q = f.apply([10.0, 0.0]);
+        assert!((q[0] - (1.0 + 10.0 * 0.1f64.cos())).abs() < 1e-12);
+        assert!((q[1] - 10.0 * 0.1f64.sin()).abs() < 1e-12);
+        // a turn across ±π is taken the short way
+        let mut f = Frame::about([0.0, 0.0]);
+        f.observe_turn(std::f64::consts::TAU - 0.1, 1.0);
+        assert!((f.turn + 0.1).abs() < 1e-12);
+    }
 
     #[test]
     fn perfect_odometry_carries_a_landmark_unchanged() {

@@ -15,7 +15,8 @@
 //! [`Navigator`] runs the three with a [`Perception`] (anything that says which landmarks
 //! the robot detects: [`RangePerception`] here, a simulator's or a real sensor's elsewhere)
 //! and re-plans around failed transitions; [`execution`] holds how it senses and remembers
-//! (the thesis's robot by default, idealised options named as such). The thesis's studies
+//! and [`robot`] what its detector and wheels get wrong (the thesis's robot by default, an
+//! erring one; idealised options named as such). The thesis's studies
 //! (§4.4.1 Table 4.1, the §4.4.2 field experiment) live in the `studies` crate, so a robot
 //! that embeds Q-Link does not compile a simulator.
 //!
@@ -46,6 +47,7 @@ pub mod map;
 pub mod navigate;
 pub mod perception;
 pub mod pomdp;
+pub mod robot;
 
 pub use bounds::{Assumptions, BoundCheck, Geometry};
 pub use controller::{Controller, ControllerKind, circle, closest_point, robot_state};
@@ -56,3 +58,4 @@ pub use map::{Layer, MapElement, QualitativeMap};
 pub use navigate::{Failure, NavConfig, NavOutcome, Navigator, TransitionRecord};
 pub use perception::{Perception, RangePerception};
 pub use pomdp::{Decision, Moves, SearchPomdp, SearchPomdpBuilder};
+pub use robot::{DetectionNoise, MotionNoise, Robot};

@@ -21,9 +21,12 @@
 //! (§4.4.2's contingency plan). Each outcome reports |P|, the trajectory length and the
 //! bound of Proposition 2, `(2π + 1)·R·|P|`.
 //!
-//! The simulation moves the robot exactly along the controller's waypoints and senses where
-//! [`Sensing`] says through a [`Perception`]: range only ([`RangePerception`]) or, in the
-//! studies, a simulator's full occlusion.
+//! The robot senses where [`Sensing`] says through a [`Perception`] — range only
+//! ([`RangePerception`]) or, in the studies, a simulator's full occlusion — and errs as its
+//! [`Robot`] says: noisy, missed and false detections, and waypoints driven with random
+//! motion error that its odometry does not see ([`crate::robot`]). It decides only from
+//! what it detects, in the frame where it believes it is; the trajectory it reports is
+//! where it truly drove.
 
 use std::collections::BTreeSet;
 
@@ -38,10 +41,17 @@ use crate::map::QualitativeMap;
 use crate::perception::distance as d;
 pub use crate::perception::{Perception, RangePerception};
 use crate::pomdp::SearchPomdp;
+use crate::robot::{Robot, run_key};
 
 /// Search circles run at the controller's radius R, a hair inside so that a landmark circled
 /// at the sensor's full range stays detected despite rounding (Proposition 1 needs R' ≥ R).
 const SEARCH_RADIUS: f64 = 1.0 - 1e-9;
+
+/// Scans the robot takes where it stands before it localises (a detector's successive
+/// frames): a landmark in view is missed on all of them with probability `miss_rate³`
+/// (0.7 % at MRCLAM's 19 %, [`crate::robot::MISS_RATE`]), where one scan would miss one in
+/// five and start the plan from too few landmarks.
+const LOOKS: usize = 3;
 
 /// Waypoint spacing of search circles (deg).
 const CIRCLE_STEP_DEG: f64 = 2.0;
@@ -82,6 +92,14 @@ pub struct NavConfig {
     /// a link (the fallback budget of a search).
     #[serde(default = "one")]
     pub fallbacks: usize,
+    /// What the robot's detector and wheels get wrong ([`Robot::EXACT`] is idealised).
+    /// A configuration written before the robot could err reads as the exact robot.
+    #[serde(default = "exact")]
+    pub robot: Robot,
+}
+
+fn exact() -> Robot {
+    Robot::EXACT
 }
 
 fn one() -> usize {
@@ -107,13 +125,18 @@ impl NavConfig {
             arrival: Arrival::default(),
             sensing: Sensing::default(),
             fallbacks: 1,
+            robot: Robot::default(),
         }
     }
 
     /// The idealised options that are on (the reports label such runs).
     #[must_use]
     pub fn idealised(&self) -> Vec<&'static str> {
-        crate::execution::idealised(self.references, self.arrival)
+        let mut out = crate::execution::idealised(self.references, self.arrival);
+        if self.robot.is_exact() {
+            out.push("exact detections and motion");
+        }
+        out
     }
 }
 
@@ -228,7 +251,8 @@ impl<'a, P: Perception> Navigator<'a, P> {
     /// A navigator.
     ///
     /// # Errors
-    /// [`QlinkError::InvalidParameter`] for a non-positive step or range.
+    /// [`QlinkError::InvalidParameter`] for a non-positive step or range, or a robot's
+    /// rate or spread out of range ([`Robot::check`]).
     pub fn new(
         map: &'a QualitativeMap,
         graph: &'a LinkGraph,
@@ -246,6 +270,7 @@ impl<'a, P: Perception> Navigator<'a, P> {
         }
         config.references.check()?;
         config.sensing.check()?;
+        config.robot.check()?;
         Ok(Self {
             map,
             graph,
@@ -289,7 +314,12 @@ impl<'a, P: Perception> Navigator<'a, P> {
         }
         let range = self.config.controller.radius;
         let (step, sensing) = (self.config.step, self.config.sensing);
-        let mut w = Walker::new(self.perception, start, step, sensing, record);
+        let robot = self.config.robot;
+        let run = run_key(
+            robot.seed,
+            &[start[0].to_bits(), start[1].to_bits(), u64::from(goal)],
+        );
+        let mut w = Walker::new(self.perception, start, step, sensing, record, robot, run);
         let mut out = NavOutcome::unfinished(None);
         let Some(mut starts) = self.localise(&mut w, range) else {
             out.failure = Some(Failure::NoStart);
@@ -340,7 +370,7 @@ impl<'a, P: Perception> Navigator<'a, P> {
             match self.follow(&mut w, &plan, goal, &mut out)? {
                 None => {
                     // the plan's last element holds the goal: the check above ends the run
-                    starts = self.map.elements_in_view(&self.perception.visible(w.pos));
+                    starts = self.map.elements_in_view(&w.visible());
                     starts.extend(plan.elements.last().copied());
                     starts.sort_unstable();
                     starts.dedup();
@@ -383,7 +413,7 @@ impl<'a, P: Perception> Navigator<'a, P> {
     /// In goal element `e`: whether the goal is in view, or found by searching `e`'s link
     /// (when the navigator searches for it).
     fn goal_found(&self, w: &mut Walker<'_, P>, e: usize, goal: u32) -> Result<bool> {
-        if !self.config.find_goal || self.perception.sees(w.pos, goal) {
+        if !self.config.find_goal || w.sees(goal) {
             return Ok(true);
         }
         let mut commands = Vec::new();
@@ -445,7 +475,7 @@ impl<'a, P: Perception> Navigator<'a, P> {
                 None => Next::Goal(goal),
             };
             let mut rec = self.transition(w, pair[0], pair[1], next)?;
-            rec.end = w.pos;
+            rec.end = w.truly();
             let ok = rec.success;
             out.transitions.push(rec);
             if !ok {
@@ -465,15 +495,14 @@ impl<'a, P: Perception> Navigator<'a, P> {
 
     /// Elements in view; if none, circle the nearest visible landmark at sensor range.
     fn localise(&self, w: &mut Walker<'_, P>, range: f64) -> Option<Vec<usize>> {
-        let visible = self.perception.visible(w.pos);
+        let visible = w.visible_over(LOOKS);
         let starts = self.map.elements_in_view(&visible);
         // The direct controller starts from an element of the landmark the robot stands at
         // (Proposition 3's x_t = L_n): from there every landmark of the element is in view.
         if self.config.controller.kind == crate::controller::ControllerKind::Direct
             && let Some(&here) = visible.iter().find(|&&id| {
-                self.perception
-                    .position(id)
-                    .is_some_and(|p| d(p, w.pos) <= 1.0)
+                let at = w.detect(id);
+                at.is_some_and(|p| d(p, w.here()) <= 1.0)
             })
         {
             let own: Vec<usize> = starts
@@ -488,22 +517,33 @@ impl<'a, P: Perception> Navigator<'a, P> {
         if !starts.is_empty() {
             return Some(starts);
         }
-        let pos = w.pos;
+        let pos = w.here();
         let anchor = visible
             .iter()
-            .filter_map(|&id| self.perception.position(id).map(|p| (id, p)))
+            .filter_map(|&id| w.detect(id).map(|p| (id, p)))
             .min_by(|a, b| d(a.1, pos).total_cmp(&d(b.1, pos)))?;
-        // circling the anchor keeps it in view: at R, or at R' when the sensor is shorter
-        let keep = range.min(self.perception.range());
-        let path = circle(anchor.1, keep * SEARCH_RADIUS, pos, CIRCLE_STEP_DEG);
+        let path = circle(anchor.1, self.in_view(range), pos, CIRCLE_STEP_DEG);
         let map = self.map;
-        let found = w.walk(&path, CIRCLE, &mut |p: &P, x| {
-            !map.elements_in_view(&p.visible(x)).is_empty()
+        let found = w.walk(&path, CIRCLE, &[anchor], &mut |w: &mut Walker<'_, P>| {
+            !map.elements_in_view(&w.visible()).is_empty()
         });
         if found {
-            Some(self.map.elements_in_view(&self.perception.visible(w.pos)))
+            Some(self.map.elements_in_view(&w.visible()))
         } else {
             None
+        }
+    }
+
+    /// The radius of a circle about a landmark that keeps it in view: R, or R' when the
+    /// sensor is shorter, less the robot's margin ([`Robot::margin`]: a robot that errs
+    /// circles inside its range by what its detections and one step's drive can be off).
+    fn in_view(&self, range: f64) -> f64 {
+        let keep = range.min(self.perception.range()) * SEARCH_RADIUS;
+        let margin = self.config.robot.margin(self.config.step);
+        if margin == 0.0 {
+            keep
+        } else {
+            (keep - margin).max(keep / 2.0)
         }
     }
 
@@ -536,9 +576,9 @@ impl<'a, P: Perception> Navigator<'a, P> {
         }
     }
 
-    /// Whether one of `pairs` is seen at once from `x`.
-    fn in_frame(p: &P, pairs: &[[u32; 2]], x: [f64; 2]) -> bool {
-        pairs.iter().any(|&[a, b]| p.sees(x, a) && p.sees(x, b))
+    /// Whether one of `pairs` is seen at once from where the robot is.
+    fn in_frame(w: &mut Walker<'_, P>, pairs: &[[u32; 2]]) -> bool {
+        pairs.iter().any(|&[a, b]| w.sees(a) && w.sees(b))
     }
 
     /// Searches for `link` in the frame of element `i`'s other two landmarks: the POMDP's
@@ -603,15 +643,15 @@ impl<'a, P: Perception> Navigator<'a, P> {
             let Some((pa, pb)) = frame(w) else {
                 return Ok(false);
             };
-            let r = robot_state(calculus, pa, pb, w.pos)?;
+            let r = robot_state(calculus, pa, pb, w.here())?;
             let dec = pomdp.decide_with(r, &belief, pomdp.horizon - step)?;
             commands.push(dec.action);
             let path = self
                 .config
                 .controller
-                .path(calculus, pa, pb, dec.action, w.pos)?;
-            let stop = &mut |p: &P, x: [f64; 2]| p.sees(x, link);
-            if w.walk(&path[1..], Leg::Command, stop) {
+                .path(calculus, pa, pb, dec.action, w.here())?;
+            let stop = &mut |w: &mut Walker<'_, P>| w.sees(link);
+            if w.walk(&path[1..], Leg::Command, &[(a, pa), (b, pb)], stop) {
                 return Ok(true);
             }
             belief = pomdp.update_not_seen(&belief, dec.action);
@@ -622,8 +662,11 @@ impl<'a, P: Perception> Navigator<'a, P> {
                 return Ok(false);
             };
             let m = [(pa[0] + pb[0]) / 2.0, (pa[1] + pb[1]) / 2.0];
-            let path = circle(m, range * SEARCH_RADIUS, w.pos, CIRCLE_STEP_DEG);
-            if w.walk(&path[1..], CIRCLE, &mut |p: &P, x| p.sees(x, link)) {
+            let path = circle(m, range * SEARCH_RADIUS, w.here(), CIRCLE_STEP_DEG);
+            let anchor = [(a, pa), (b, pb)];
+            if w.walk(&path[1..], CIRCLE, &anchor, &mut |w: &mut Walker<'_, P>| {
+                w.sees(link)
+            }) {
                 return Ok(true);
             }
         }
@@ -633,7 +676,7 @@ impl<'a, P: Perception> Navigator<'a, P> {
     /// The landmark of edge (i, j)'s link set to search for: with β ≥ 2 the set has several,
     /// and one the robot does not see yet is progress towards M_j's frame (a visible one is
     /// not).
-    fn link_for(&self, pos: [f64; 2], i: usize, j: usize) -> u32 {
+    fn link_for(&self, w: &mut Walker<'_, P>, i: usize, j: usize) -> u32 {
         let links = self
             .graph
             .edge(i, j)
@@ -642,7 +685,7 @@ impl<'a, P: Perception> Navigator<'a, P> {
         links
             .iter()
             .copied()
-            .find(|&l| !self.perception.sees(pos, l))
+            .find(|&l| !w.sees(l))
             .or(links.first().copied())
             .unwrap_or(self.map.elements()[j].landmarks[0])
     }
@@ -655,7 +698,7 @@ impl<'a, P: Perception> Navigator<'a, P> {
         next: Next,
     ) -> Result<TransitionRecord> {
         let start_len = w.length;
-        let link = self.link_for(w.pos, i, j);
+        let link = self.link_for(w, i, j);
         let mut rec = TransitionRecord {
             from: i,
             to: j,
@@ -663,7 +706,7 @@ impl<'a, P: Perception> Navigator<'a, P> {
             commands: Vec::new(),
             success: false,
             length: 0.0,
-            end: w.pos,
+            end: w.truly(),
         };
         let range = self.config.controller.radius;
         let refs = self.references(j, next);
@@ -674,41 +717,46 @@ impl<'a, P: Perception> Navigator<'a, P> {
         // the direct controller (Proposition 4): a visible link is driven to in a straight
         // line; at a landmark of M_j all of M_j is in view when Assumption 3 holds
         if self.config.controller.kind == crate::controller::ControllerKind::Direct
-            && self.perception.sees(w.pos, link)
-            && let Some(pl) = self.perception.position(link)
+            && let Some(pl) = w.detect(link)
         {
             // all the way to the link (not just until M_j is in view), so the next
             // transition starts at a landmark again (Proposition 3)
             rec.commands.push(usize::MAX);
-            w.walk(&[pl], Leg::Command, &mut |_: &P, _| false);
-            if Self::in_frame(self.perception, &refs, w.pos) {
+            w.walk(&[pl], Leg::Command, &[(link, pl)], &mut |_: &mut Walker<
+                '_,
+                P,
+            >| {
+                false
+            });
+            if Self::in_frame(w, &refs) {
                 done(w, &mut rec);
                 return Ok(rec);
             }
         }
-        if Self::in_frame(self.perception, &refs, w.pos) {
+        if Self::in_frame(w, &refs) {
             done(w, &mut rec);
             return Ok(rec);
         }
         // phase 1: find the link in M_i's frame
-        if !self.perception.sees(w.pos, link) && !self.search_link(w, i, link, &mut rec.commands)? {
+        if !w.sees(link) && !self.search_link(w, i, link, &mut rec.commands)? {
             rec.length = w.length - start_len;
             return Ok(rec);
         }
         // phase 2: two landmarks of M_j at once
-        if Self::in_frame(self.perception, &refs, w.pos) {
+        if Self::in_frame(w, &refs) {
             done(w, &mut rec);
             return Ok(rec);
         }
-        let Some(pl) = self.perception.position(link) else {
+        let Some(pl) = w.detect(link) else {
             rec.length = w.length - start_len;
             return Ok(rec);
         };
-        // circling the link keeps it in view: at R, or at R' when the sensor is shorter
-        let keep = range.min(self.perception.range());
-        let path = circle(pl, keep * SEARCH_RADIUS, w.pos, CIRCLE_STEP_DEG);
-        let ok = w.walk(&path[1..], CIRCLE, &mut |p: &P, x| {
-            Self::in_frame(p, &refs, x)
+        let path = circle(pl, self.in_view(range), w.here(), CIRCLE_STEP_DEG);
+        let ok = w.walk(&path[1..], CIRCLE, &[(link, pl)], &mut |w: &mut Walker<
+            '_,
+            P,
+        >| {
+            Self::in_frame(w, &refs)
         });
         if ok {
             done(w, &mut rec);

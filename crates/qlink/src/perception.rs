@@ -18,6 +18,9 @@ pub trait Perception: Sync {
     fn sees(&self, pos: [f64; 2], id: u32) -> bool;
     /// Every landmark detected from `pos`, sorted.
     fn visible(&self, pos: [f64; 2]) -> Vec<u32>;
+    /// Every landmark the sensor could report, sorted: what a false report
+    /// ([`crate::DetectionNoise::false_rate`]) takes a feature for.
+    fn ids(&self) -> Vec<u32>;
     /// The sensor range.
     fn range(&self) -> f64;
 }
@@ -68,6 +71,9 @@ impl Perception for RangePerception {
             .filter(|(_, p)| distance(pos, **p) <= self.range)
             .map(|(id, _)| *id)
             .collect()
+    }
+    fn ids(&self) -> Vec<u32> {
+        self.ids.clone()
     }
     fn range(&self) -> f64 {
         self.range

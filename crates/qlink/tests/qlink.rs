@@ -3,6 +3,8 @@
 //! Assumptions 1–2.
 #![allow(clippy::unwrap_used)]
 
+mod common;
+use common::exact_map;
 use std::collections::{BTreeMap, BTreeSet};
 
 use qlink::{
@@ -16,13 +18,6 @@ fn line_world() -> BTreeMap<u32, [f64; 2]> {
     (0..5u32)
         .map(|i| (i, [8.0 * f64::from(i), if i % 2 == 0 { 0.0 } else { 1.0 }]))
         .collect()
-}
-
-fn exact_map(positions: &BTreeMap<u32, [f64; 2]>, range: f64) -> QualitativeMap {
-    let layer =
-        Layer::exact_from_positions(Calculus::builtin("quadrant").unwrap(), positions, range)
-            .unwrap();
-    QualitativeMap::new(vec![layer]).unwrap()
 }
 
 #[test]
@@ -292,6 +287,9 @@ fn guarantees_hold_when_the_assumptions_do() {
         let perception = RangePerception::new(&landmarks, range);
         let mut cfg = config(ControllerKind::Arc, range);
         cfg.replan = false;
+        // the propositions are about a robot that sees and drives exactly; the erring one
+        // can fail (crates/qlink/tests/erring_robot.rs)
+        cfg.robot = qlink::Robot::EXACT;
         let nav = Navigator::new(&map, &g, &perception, &cfg).unwrap();
         let mut runs = 0;
         for s in 0..25u32 {
@@ -339,6 +337,9 @@ fn replanning_recovers_from_a_forced_failure() {
                 .into_iter()
                 .filter(|&i| i != self.1)
                 .collect()
+        }
+        fn ids(&self) -> Vec<u32> {
+            self.0.ids()
         }
         fn range(&self) -> f64 {
             self.0.range()
@@ -468,6 +469,7 @@ fn proposition_4_holds_for_the_direct_controller() {
         let perception = RangePerception::new(&landmarks, range);
         let mut cfg = config(ControllerKind::Direct, range);
         cfg.replan = false;
+        cfg.robot = qlink::Robot::EXACT; // Proposition 4 is about the exact robot
         let nav = Navigator::new(&map, &g, &perception, &cfg).unwrap();
         let mut runs = 0;
         for s in 0..30u32 {

@@ -3,42 +3,29 @@
 //! thing (so the test could fail).
 #![allow(clippy::unwrap_used)]
 
+mod common;
+use common::{exact_map, random_world};
 use std::collections::{BTreeMap, HashMap};
 use std::sync::Mutex;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
 use qlink::{
-    Arrival, Controller, ControllerKind, Layer, LinkGraph, NavConfig, NavOutcome, Navigator,
-    Odometry, Perception, QualitativeMap, RangePerception, References, SearchPomdp,
+    Arrival, Controller, ControllerKind, LinkGraph, NavConfig, NavOutcome, Navigator, Odometry,
+    Perception, QualitativeMap, RangePerception, References, SearchPomdp,
 };
 use qsr_core::Calculus;
 
-fn random_world(seed: u64, n: u32, side: f64) -> BTreeMap<u32, [f64; 2]> {
-    use rand::{RngExt, SeedableRng};
-    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
-    (0..n)
-        .map(|i| {
-            (
-                i,
-                [rng.random_range(0.0..side), rng.random_range(0.0..side)],
-            )
-        })
-        .collect()
-}
-
-fn exact_map(positions: &BTreeMap<u32, [f64; 2]>, range: f64) -> QualitativeMap {
-    let layer =
-        Layer::exact_from_positions(Calculus::builtin("quadrant").unwrap(), positions, range)
-            .unwrap();
-    QualitativeMap::new(vec![layer]).unwrap()
-}
-
+/// The thesis's navigator on the exact robot: each test here isolates one choice of how the
+/// robot senses and remembers, which detection and motion noise would blur.
 fn thesis(radius: f64) -> NavConfig {
     let quadrant = Calculus::builtin("quadrant").unwrap();
-    NavConfig::thesis(
-        Controller::new(ControllerKind::Arc, radius),
-        SearchPomdp::builder(&quadrant).build().unwrap(),
-    )
+    NavConfig {
+        robot: qlink::Robot::EXACT,
+        ..NavConfig::thesis(
+            Controller::new(ControllerKind::Arc, radius),
+            SearchPomdp::builder(&quadrant).build().unwrap(),
+        )
+    }
 }
 
 /// Range perception that counts the positions read for a landmark whose last detection
@@ -81,6 +68,9 @@ impl Perception for Spy {
             seen.insert(id, true);
         }
         v
+    }
+    fn ids(&self) -> Vec<u32> {
+        self.inner.ids()
     }
     fn range(&self) -> f64 {
         self.inner.range()

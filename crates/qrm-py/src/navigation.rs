@@ -19,10 +19,12 @@ use crate::mapping::Pqrm;
 /// Navigates from landmark `start` to landmark `goal` in a world of point landmarks
 /// (`positions`: id → (x, y)) seen within `range`, with a map that is either `pqrm` or —
 /// when it is None — the exact QRM of `calculus` a robot of range `map_range` would record.
-/// Returns the outcome as a dict (success, failure, plan_len, replans, length,
-/// transit_length, bound, trajectory, transitions).
+/// The robot errs (`qlink::Robot::default()`: N(0, 0.3 m) detections, MRCLAM's miss rate,
+/// wheel slip; draws from `seed`) unless `exact_robot`. Returns the outcome as a dict
+/// (success, failure, plan_len, replans, length, transit_length, bound, trajectory,
+/// transitions).
 #[pyfunction]
-#[pyo3(signature = (positions, start, goal, *, pqrm = None, calculus = None, range = 20.0, map_range = None, beta = 1, controller = "arc", horizon = 4, replan = true))]
+#[pyo3(signature = (positions, start, goal, *, pqrm = None, calculus = None, range = 20.0, map_range = None, beta = 1, controller = "arc", horizon = 4, replan = true, exact_robot = false, seed = 0))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn navigate(
     py: Python<'_>,
@@ -37,6 +39,8 @@ pub(crate) fn navigate(
     controller: &str,
     horizon: usize,
     replan: bool,
+    exact_robot: bool,
+    seed: u64,
 ) -> PyResult<String> {
     if positions
         .values()
@@ -68,6 +72,11 @@ pub(crate) fn navigate(
             replan,
             max_replans: 3,
             map_range,
+            robot: if exact_robot {
+                qlink::Robot::EXACT
+            } else {
+                qlink::Robot::default().with_seed(seed)
+            },
             ..NavConfig::thesis(
                 Controller::new(kind, range),
                 SearchPomdp::builder(&calc).horizon(horizon).build()?,
@@ -130,7 +139,7 @@ pub(crate) fn qlink_field(
 /// JSON `{"table": [...], "records": [...]}`. Watched: Ctrl-C stops it,
 /// `progress(done, total)` is called as navigations finish.
 #[pyfunction]
-#[pyo3(signature = (trial, quick, pairs, seed, progress = None))]
+#[pyo3(signature = (trial, quick, pairs, seed, progress = None, exact_robot = false))]
 pub(crate) fn qlink_study(
     py: Python<'_>,
     trial: &str,
@@ -138,6 +147,7 @@ pub(crate) fn qlink_study(
     pairs: Option<usize>,
     seed: u64,
     progress: Option<&Bound<'_, PyAny>>,
+    exact_robot: bool,
 ) -> PyResult<String> {
     let trial: studies::qlink::table_4_1::Trials = trial.parse().map_err(study_err)?;
     crate::pool::watched(py, progress, move |watch| -> Result<String, StudyError> {
@@ -147,6 +157,7 @@ pub(crate) fn qlink_study(
             studies::qlink::table_4_1::StudyConfig::full(seed)
         };
         config.trial = trial;
+        config.exact_robot = exact_robot;
         if pairs.is_some() {
             config.pairs = pairs;
         }

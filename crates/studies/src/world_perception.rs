@@ -58,6 +58,11 @@ impl Perception for WorldPerception<'_> {
         out.sort_unstable();
         out
     }
+    fn ids(&self) -> Vec<u32> {
+        let mut ids: Vec<u32> = self.index.keys().copied().collect();
+        ids.sort_unstable();
+        ids
+    }
     fn range(&self) -> f64 {
         self.range
     }

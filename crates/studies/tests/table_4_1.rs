@@ -97,3 +97,31 @@ fn shards_in_any_order_give_the_local_run() {
     assert!(e.contains("missing [0]"), "{e}");
     assert!(Table41::run_shard(&config, 3, &|| {}).is_err());
 }
+
+/// Issue 36: sensing every metre, the exact robot never failed the occlusion study (0 of
+/// 39,800 at every size); the robot that errs — the study's default — does, and the exact
+/// one stays available, labelled idealised.
+#[test]
+fn the_occlusion_study_fails_on_the_robot_that_errs() {
+    use studies::qlink::table_4_1::{Schedule, StudyConfig, run_study, table};
+    let config = StudyConfig {
+        trial: studies::qlink::table_4_1::Trials::Occlusion,
+        sizes: vec![0.7],
+        pairs: Some(200),
+        samples: 40,
+        schedule: Schedule::CONTINUOUS,
+        occlusion_schedules: Vec::new(),
+        ..StudyConfig::quick(2)
+    };
+    assert!(!config.navigating_robot().is_exact() && config.idealised().is_empty());
+    let exact = StudyConfig {
+        exact_robot: true,
+        ..config.clone()
+    };
+    assert!(exact.idealised().contains(&"exact detections and motion"));
+    let failures = |c: &StudyConfig| table(&run_study(c, &|| {}).unwrap().0)[0].failures;
+    let (errs, exact) = (failures(&config), failures(&exact));
+    assert_eq!(exact, 0, "the exact robot at continuous sensing");
+    eprintln!("failures: erring {errs}, exact {exact} of 200");
+    assert!(errs > 0, "the erring robot: {errs} of 200");
+}

@@ -251,6 +251,8 @@ def navigate(
     controller: str = "arc",
     horizon: int = 4,
     replan: bool = True,
+    exact_robot: bool = False,
+    seed: int = 0,
 ) -> types.NavOutcome:
     """Q-Link from landmark `start` to landmark `goal` (thesis chapter 4).
 
@@ -260,12 +262,18 @@ def navigate(
     arc, midpoint-sweep, closest-point, safe-search, direct. Returns success, failure, plan_len,
     replans, length, transit_length, bound (Proposition 2), bound_direct (Proposition 4),
     trajectory and transitions.
+
+    The robot errs as the thesis's would: detections with N(0, 0.3 m) noise, missed as often
+    as a real camera misses a landmark in view, wheels that slip (the trajectory is what it
+    drove); its draws come from `seed`. `exact_robot=True` is the idealised robot: true
+    detections, waypoints driven exactly.
     """
     calc = Calculus.builtin(calculus) if isinstance(calculus, str) else calculus
     pos = {int(k): (float(v[0]), float(v[1])) for k, v in positions.items()}
     out: types.NavOutcome = json.loads(
         _qrm.navigate(pos, start, goal, pqrm=pqrm, calculus=calc, range=range, map_range=map_range,
-                      beta=beta, controller=controller, horizon=horizon, replan=replan)
+                      beta=beta, controller=controller, horizon=horizon, replan=replan,
+                      exact_robot=exact_robot, seed=seed)
     )
     return out
 
@@ -292,12 +300,15 @@ def qlink_study(
     pairs: Optional[int] = None,
     seed: int = 0,
     progress: Optional[Progress] = None,
+    exact_robot: bool = False,
 ) -> types.QlinkStudy:
     """The §4.4.1 study (Table 4.1): `{"table": [...], "records": [...]}`. `progress` counts
     each world's map, a distance field per goal landmark and every navigation, its total known
-    before the first."""
+    before the first. The navigating robot errs (N(0, 0.3 m) detections, missed ones, wheel
+    slip) unless `exact_robot`."""
     result: types.QlinkStudy = json.loads(
-        _qrm.qlink_study(trial, quick, pairs, seed, progress=_progress_callback(progress))
+        _qrm.qlink_study(trial, quick, pairs, seed, progress=_progress_callback(progress),
+                         exact_robot=exact_robot)
     )
     return result
 

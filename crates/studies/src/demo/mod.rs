@@ -47,9 +47,29 @@ pub struct DemoConfig {
     /// Sensor range R' of the navigating robot (m); the mapping robot's lidar reaches
     /// R = 30 m, and arcs and search circles run at R as in the thesis (§4.4.1).
     pub nav_range: f64,
+    /// What the navigating robot's detector and wheels get wrong (seeded by `seed`): the
+    /// site's detection noise N(0, 0.7), misses and wheeled motion noise.
+    #[serde(default = "demo_robot")]
+    pub robot: qlink::Robot,
+    /// Idealised: true detections and exact driving (`robot` unused; labelled as such).
+    #[serde(default)]
+    pub exact_robot: bool,
+}
+
+/// The demo's navigating robot: the §4.4.2 site's detection noise N(0, 0.7) with the
+/// default misses, wheeled motion noise.
+#[must_use]
+pub fn demo_robot() -> qlink::Robot {
+    qlink::Robot::erring(0.7)
 }
 
 impl DemoConfig {
+    /// The navigating robot: `robot` seeded with the demo's seed, or the exact one.
+    #[must_use]
+    pub fn navigating_robot(&self) -> qlink::Robot {
+        self.robot.or_exact(self.exact_robot, self.seed)
+    }
+
     /// The demo of `seed`: the goal by the run rule, R' = R = 30 m.
     #[must_use]
     pub fn new(seed: u64) -> Self {
@@ -57,6 +77,8 @@ impl DemoConfig {
             seed,
             goal: None,
             nav_range: 30.0,
+            robot: demo_robot(),
+            exact_robot: false,
         }
     }
 }
@@ -114,7 +136,8 @@ fn run(config: &DemoConfig, progress: &dyn Progress) -> Result<DemoOutput> {
     let map = pipeline::qualitative_map(flip, learned.as_ref(), &mapping.scans, config.seed)?;
     progress.tick();
     progress.check()?;
-    let (graph, nav_config) = pipeline::navigator(&map, &mapping.scenario)?;
+    let (graph, mut nav_config) = pipeline::navigator(&map, &mapping.scenario)?;
+    nav_config.robot = config.navigating_robot();
     let perception = WorldPerception::new(&mapping.scenario.world, config.nav_range);
     let setting = choice::Setting {
         map: &map,
@@ -186,7 +209,10 @@ impl Study for Demo {
                 config.nav_range
             )));
         }
-        Ok(())
+        config
+            .robot
+            .check()
+            .map_err(|e| StudyError::InvalidParameter(e.to_string()))
     }
     fn shards(config: &DemoConfig) -> Result<usize> {
         Self::check(config)?;

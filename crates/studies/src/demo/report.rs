@@ -104,6 +104,7 @@ fn summary(config: &DemoConfig, o: &DemoOutput) -> Attachment {
         "replans": nav.replans,
         "map_range": o.map_range,
         "sensor_range": config.nav_range,
+        "robot": if config.exact_robot { json!("exact") } else { json!(config.navigating_robot()) },
         "trajectory_length": nav.length,
         "transit_length": nav.transit_length,
         "prop2_bound": nav.bound,

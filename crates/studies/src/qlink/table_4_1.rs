@@ -5,7 +5,9 @@
 //! calculus; a Link Graph with β = 1 and unit costs; the arc controller driving arcs and
 //! fallback circles of radius R whatever the sensor range R' (§4.4.1); a horizon-4 search
 //! POMDP; the thesis's robot of [`qlink::execution`] (unseen references where last seen,
-//! arrival on the next frame's references), idealised options named in [`StudyConfig`]. Every ordered (start, goal) landmark pair is navigated (39,800 of them) for sensor
+//! arrival on the next frame's references) erring as [`qlink::Robot`] says — the mapping
+//! robot's detection noise N(0, 0.3), MRCLAM's miss rate, wheeled motion noise
+//! ([`thesis_robot`]); idealised options named in [`StudyConfig`] (`exact_robot` among them). Every ordered (start, goal) landmark pair is navigated (39,800 of them) for sensor
 //! ranges R'/R ∈ {1, 0.9, 0.8, 0.7, 0.6} without occlusion, and for landmark sizes
 //! {0.1, 0.3, 0.5, 0.7} m with full occlusion at R' = R. A navigation fails when a transition
 //! fails (no re-planning, as in the thesis); pairs without a path in the link graph are
@@ -22,8 +24,8 @@ use serde::{Deserialize, Serialize};
 
 use qlink::{
     Arrival, Controller, ControllerKind, DistanceField, Failure, LinkGraph, NavConfig, NavOutcome,
-    Navigator, Perception, QlinkError, QualitativeMap, RangePerception, References, SearchPomdp,
-    Sensing,
+    Navigator, Perception, QlinkError, QualitativeMap, RangePerception, References, Robot,
+    SearchPomdp, Sensing,
 };
 
 pub mod report;
@@ -206,7 +208,25 @@ pub struct StudyConfig {
     /// Pairs per setting of those further rows (`None`: as `pairs`).
     #[serde(default)]
     pub schedule_pairs: Option<usize>,
+    /// What the navigating robot's detector and wheels get wrong (seeded by `seed`): the
+    /// thesis's N(0, 0.3), misses, rare false reports and wheeled motion noise
+    /// ([`qlink::robot`]).
+    #[serde(default = "thesis_robot")]
+    pub robot: Robot,
+    /// Idealised: the navigating robot detects true positions and drives its waypoints
+    /// exactly (`robot` unused; runs labelled as such).
+    #[serde(default)]
+    pub exact_robot: bool,
 }
+
+/// The §4.4.1 navigating robot: the mapping robot's detection noise N(0, 0.3).
+#[must_use]
+pub fn thesis_robot() -> Robot {
+    Robot::erring(MAP_SIGMA)
+}
+
+/// σ of the §4.4.1 robot's detections (m): "measurement noise modeled as N(0, 0.3)".
+pub const MAP_SIGMA: f64 = 0.3;
 
 fn continuous() -> Schedule {
     Schedule::CONTINUOUS
@@ -256,6 +276,8 @@ impl StudyConfig {
                 },
             ],
             schedule_pairs: Some(8000),
+            robot: thesis_robot(),
+            exact_robot: false,
         }
     }
 
@@ -340,6 +362,9 @@ impl StudyConfig {
                 )
                 .to_string());
         }
+        if let Err(e) = self.robot.check() {
+            return bad(e.to_string());
+        }
         let main = |trial: Trial, value: f64| Setting {
             trial,
             value,
@@ -389,16 +414,26 @@ impl StudyConfig {
         Ok(NavConfig {
             references: self.references,
             arrival: self.arrival,
+            robot: self.navigating_robot(),
             sensing: setting.schedule.sensing,
             fallbacks: setting.schedule.fallbacks,
             ..nav_config(radius, self.step)?
         })
     }
 
+    /// The navigating robot: `robot` seeded with the study's seed, or the exact one.
+    #[must_use]
+    pub fn navigating_robot(&self) -> Robot {
+        self.robot.or_exact(self.exact_robot, self.seed)
+    }
+
     /// The idealised options this study runs with (empty: the thesis's robot).
     #[must_use]
     pub fn idealised(&self) -> Vec<&'static str> {
         let mut out = qlink::execution::idealised(self.references, self.arrival);
+        if self.navigating_robot().is_exact() {
+            out.push("exact detections and motion");
+        }
         if self.radius == ArcRadius::SensorRange {
             out.push("arcs and circles of the sensor's R', not the mapping robot's R");
         }

@@ -113,10 +113,27 @@ pub struct FieldParams {
     /// the world of `seed` alone.
     #[serde(default = "one_world")]
     pub worlds: usize,
+    /// What the navigating robot's wheels get wrong (seeded by `seed`). Its detections are
+    /// the lidar pipeline's — scanner noise, extraction, recognition with its aliasing — so
+    /// the robot adds no detection noise of its own ([`field_robot`]).
+    #[serde(default = "field_robot")]
+    pub robot: qlink::Robot,
+    /// Idealised: the robot drives its waypoints exactly (`robot` unused; runs labelled).
+    #[serde(default)]
+    pub exact_robot: bool,
 }
 
 fn one_world() -> usize {
     1
+}
+
+/// The field robot: the lidar pipeline's detections, wheeled motion noise.
+#[must_use]
+pub fn field_robot() -> qlink::Robot {
+    qlink::Robot {
+        detection: qlink::DetectionNoise::EXACT,
+        ..qlink::Robot::default()
+    }
 }
 
 /// Most field trials (worlds × trials) a config may ask for: a trial takes a tenth of a
@@ -135,6 +152,12 @@ pub const MIN_STEP_M: f64 = 0.01;
 pub const MAX_STEP_M: f64 = 1000.0;
 
 impl FieldParams {
+    /// The navigating robot: `robot` seeded with the experiment's seed, or the exact one.
+    #[must_use]
+    pub fn navigating_robot(&self) -> qlink::Robot {
+        self.robot.or_exact(self.exact_robot, self.seed)
+    }
+
     /// The full experiment: 200 trials per variant.
     #[must_use]
     pub fn full(seed: u64) -> Self {
@@ -152,6 +175,8 @@ impl FieldParams {
             max_replans: 3,
             step: 1.0,
             worlds: 5,
+            robot: field_robot(),
+            exact_robot: false,
         }
     }
 
@@ -179,6 +204,9 @@ impl FieldParams {
             ));
         }
         pqrm::config::check_samples(self.samples)?;
+        self.robot
+            .check()
+            .map_err(|e| StudyError::InvalidParameter(e.to_string()))?;
         // The search POMDP's work grows exponentially with its horizon; a link needs at most
         // three shared landmarks (an element has three); re-plans and votes bounded alike
         // (issue 39: each was accepted at 10¹²).

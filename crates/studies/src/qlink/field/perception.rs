@@ -166,6 +166,9 @@ impl Perception for LidarPerception<'_> {
     fn visible(&self, pos: [f64; 2]) -> Vec<u32> {
         self.observe(pos).iter().map(|s| s.id).collect()
     }
+    fn ids(&self) -> Vec<u32> {
+        self.mapped.iter().copied().collect()
+    }
     /// The *effective* range: the median distance at which the mapping drive recognised
     /// landmarks (the scanner reaches 30 m, but a trunk is a landmark candidate only when
     /// close; search circles at the scanner's range would lose every reference).

@@ -91,6 +91,7 @@ fn setup(config: &FieldParams) -> String {
             ""
         }
     );
+    let _ = writeln!(s, "The navigating robot {}.\n", config.navigating_robot());
     let _ = writeln!(
         s,
         "A success reaches an element holding the goal landmark, finds the goal itself in that \

@@ -470,6 +470,7 @@ pub fn nav_config(
         max_replans: params.max_replans,
         map_range: field.scenario.lidar.max_range,
         find_goal: true,
+        robot: params.navigating_robot(),
         ..NavConfig::thesis(controller, pomdp)
     }
 }

@@ -148,8 +148,11 @@ fn setup(config: &StudyConfig, output: &Output) -> String {
     };
     let _ = writeln!(
         s,
-        "Set-up (DESIGN §7): `qlink-200` world (seed {}), mapped with R = {MAP_RANGE} m and N(0, 0.3) noise into a PQRM (`quadrant`, {} samples per landmark per frame, floor 1); β = 1, unit costs; horizon-4 search POMDP (moves to adjacent states, p_detect 0.9); arc controller, arcs and search circles of radius {radius}; references of a frame: {references}; a transition completes when {arrival}; sensing {}; no re-planning (a failed transition fails the pair, as in the thesis).\n",
-        config.seed, config.samples, config.schedule,
+        "Set-up (DESIGN §7): `qlink-200` world (seed {}), mapped with R = {MAP_RANGE} m and N(0, 0.3) noise into a PQRM (`quadrant`, {} samples per landmark per frame, floor 1); β = 1, unit costs; horizon-4 search POMDP (moves to adjacent states, p_detect 0.9); arc controller, arcs and search circles of radius {radius}; references of a frame: {references}; a transition completes when {arrival}; sensing {}; no re-planning (a failed transition fails the pair, as in the thesis). The navigating robot {}.\n",
+        config.seed,
+        config.samples,
+        config.schedule,
+        config.navigating_robot(),
     );
     let _ = writeln!(s, "Maps:\n");
     for i in output
