@@ -209,10 +209,7 @@ impl Study for Demo {
                 config.nav_range
             )));
         }
-        config
-            .robot
-            .check()
-            .map_err(|e| StudyError::InvalidParameter(e.to_string()))
+        Ok(config.robot.check()?)
     }
     fn shards(config: &DemoConfig) -> Result<usize> {
         Self::check(config)?;

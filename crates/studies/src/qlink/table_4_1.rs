@@ -362,9 +362,7 @@ impl StudyConfig {
                 )
                 .to_string());
         }
-        if let Err(e) = self.robot.check() {
-            return bad(e.to_string());
-        }
+        self.robot.check()?;
         let main = |trial: Trial, value: f64| Setting {
             trial,
             value,

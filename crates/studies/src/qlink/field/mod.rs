@@ -204,9 +204,7 @@ impl FieldParams {
             ));
         }
         pqrm::config::check_samples(self.samples)?;
-        self.robot
-            .check()
-            .map_err(|e| StudyError::InvalidParameter(e.to_string()))?;
+        self.robot.check()?;
         // The search POMDP's work grows exponentially with its horizon; a link needs at most
         // three shared landmarks (an element has three); re-plans and votes bounded alike
         // (issue 39: each was accepted at 10¹²).
