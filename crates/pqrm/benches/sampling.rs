@@ -1,7 +1,9 @@
 //! One PQRM step as in the Monte Carlo study: 10 landmarks, s = 1000 samples each, every
 //! ordered triplet (720) classified in the EDC and histogrammed — 720,000 triplet-samples.
-//! Measured on one core and on two; `crates/qrm-py/benches/sampling_numpy.py` (with the
-//! wheel it imports) runs the same computation in NumPy and prints the ratio.
+//! Measured on one core and on two. The comparison with NumPy and numba is
+//! `crates/qrm-py/benches/sampling_numpy.py` (through the wheel, every implementation timed
+//! the same way in one process); `examples/step_timing.rs` gives best-of-N figures that hold
+//! up on a loaded machine better than criterion's mean.
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use pqrm::likelihood::{Orderings, step_counts};

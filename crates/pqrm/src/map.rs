@@ -673,17 +673,22 @@ impl Evidence {
             .then(|| counts.counts(0).iter().map(|&c| u64::from(c)).sum::<u64>())
             .filter(|&total| total as usize <= counts.len() * q)
             .map(|total| {
-                let mut probe = vec![0u32; q.max(1)];
+                // `log_likelihood`'s entry for a bin of `c` out of `total`, term for term: its
+                // sum of the counts is exact (integers below 2^53), so one logarithm per
+                // count replaces a whole histogram's (the profile's top after the kernel)
+                let floor = if floor.is_finite() && floor > 0.0 {
+                    floor
+                } else {
+                    0.0
+                };
+                let sum = total as f64 + floor * q.max(1) as f64;
                 let values = (0..=total)
                     .map(|c| {
-                        // `log_likelihood` of a histogram with `c` in one bin and the rest
-                        // elsewhere: the same sum and floor, so the same total
-                        probe.fill(0);
-                        probe[0] = c as u32;
-                        if q > 1 {
-                            probe[1] = (total - c) as u32;
+                        if sum <= 0.0 {
+                            -(q.max(1) as f64).ln()
+                        } else {
+                            ((c as f64 + floor) / sum).ln()
                         }
-                        log_likelihood(&probe, floor)[0]
                     })
                     .collect();
                 (total, values)
@@ -741,6 +746,9 @@ pub fn normalise(mut log_p: Vec<f64>) -> Vec<f64> {
     log_p
 }
 
+/// Below this, `exp` underflows to 0 (its smallest subnormal result is at about −745.13).
+const UNDERFLOW: f64 = -746.0;
+
 /// [`normalise`] without allocating.
 pub fn normalise_in_place(log_p: &mut [f64]) {
     let n = log_p.len();
@@ -766,6 +774,87 @@ pub fn normalise_in_place(log_p: &mut [f64]) {
         log_p.iter_mut().for_each(|v| *v = u);
         return;
     }
-    let z = max + log_p.iter().map(|v| (v - max).exp()).sum::<f64>().ln();
+    // below −745 `exp` is 0 in IEEE arithmetic anyway: skipping it keeps libm off its
+    // underflow path (errno, and the SVID wrapper in manylinux builds), which a sharp belief
+    // takes for most of its states at every step
+    let z = max
+        + log_p
+            .iter()
+            .map(|v| {
+                let d = v - max;
+                if d < UNDERFLOW { 0.0 } else { d.exp() }
+            })
+            .sum::<f64>()
+            .ln();
     log_p.iter_mut().for_each(|v| *v -= z);
+}
+
+#[cfg(test)]
+mod tests {
+    #![allow(clippy::unwrap_used)] // tests: a panic is the failure report
+    use super::*;
+
+    /// Regression (issue 37): the evidence table computed a whole histogram's logarithms per
+    /// possible count; its one-logarithm form must give `log_likelihood`'s values bit for bit.
+    #[test]
+    fn the_evidence_table_is_log_likelihood_bit_for_bit() {
+        for q in [1usize, 2, 7, 20] {
+            for floor in [0.0, 0.25, 1.0, 3.0, -1.0, f64::NAN] {
+                for total in [0u32, 1, 9, 50] {
+                    let mut counts = StepCounts::new(q);
+                    let mut first = vec![0u32; q];
+                    first[0] = total;
+                    // enough sets that the table is built (at most one entry per count)
+                    for id in 0..=total {
+                        counts.push(LandmarkSet::new(1, 2, 3 + id), &first).unwrap();
+                    }
+                    let evidence = Evidence::new(floor, 1.0, &counts);
+                    assert!(evidence.table.is_some(), "the table path is tested");
+                    let mut out = vec![0.0; q];
+                    // every split of the total between two states, and the total in one
+                    for c in 0..=total {
+                        let mut h = vec![0u32; q];
+                        h[0] = c;
+                        if q > 1 {
+                            h[q - 1] = total - c;
+                        }
+                        evidence.fill(&h, &mut out);
+                        let want = log_likelihood(&h, floor);
+                        let same = out
+                            .iter()
+                            .zip(&want)
+                            .all(|(a, b)| a.to_bits() == b.to_bits());
+                        assert!(same, "q {q}, floor {floor}, {h:?}: {out:?} vs {want:?}");
+                    }
+                }
+            }
+        }
+    }
+
+    /// Regression (issue 37): skipping `exp` where it underflows changes no bit of the
+    /// normalised belief.
+    #[test]
+    fn normalising_without_underflowing_exp_changes_no_bit() {
+        let plain = |v: &[f64]| -> Vec<f64> {
+            let max = v.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+            let z = max + v.iter().map(|x| (x - max).exp()).sum::<f64>().ln();
+            v.iter().map(|x| x - z).collect()
+        };
+        let cases: [&[f64]; 4] = [
+            &[0.0, -745.0, -745.2, -746.0, -746.1, -1e4, f64::NEG_INFINITY],
+            &[-3.0, -2.0, -1000.0, -0.5],
+            &[-800.0, -1.0, -1.0, -2000.0],
+            &[5.0, -740.9, -745.13, -5000.0],
+        ];
+        for v in cases {
+            let mut got = v.to_vec();
+            normalise_in_place(&mut got);
+            let want = plain(v);
+            let same = got
+                .iter()
+                .zip(&want)
+                .all(|(a, b)| a.to_bits() == b.to_bits());
+            assert!(same, "{v:?}: {got:?} vs {want:?}");
+        }
+    }
 }
