@@ -26,7 +26,10 @@
 //! least one pseudo-count per state ([`SCORE_FLOOR`]) so that every score is finite.
 //!
 //! The samples are drawn exactly as the mapper draws them (seed, step = the frame's index),
-//! so the evidence of the fit is the evidence of the map.
+//! so the evidence of the fit is the evidence of the map. The other blocks' belief is read
+//! under the evidence model the map will be read under ([`TemperOptions::evidence`]): with
+//! `shared`, a set trained on n frames is `softmax(τ(n) · τ · Σ ln ℓ)`, exactly what the
+//! map states, so τ corrects what the model leaves and does not repeat its correction.
 
 use qsr_core::progress::Progress;
 use std::collections::{BTreeMap, HashMap};
@@ -35,6 +38,7 @@ use qsr_core::Calculus;
 use serde::{Deserialize, Serialize};
 
 use crate::error::{PqrmError, Result};
+use crate::evidence::EvidenceModel;
 use crate::likelihood::{LandmarkSet, StepCounts, log_likelihood, step_counts};
 use crate::map::{PqrmConfig, normalise};
 use crate::observation::Scan;
@@ -146,6 +150,12 @@ pub struct TemperOptions {
     pub folds: usize,
     /// Candidate exponents, each in (0, 1].
     pub grid: Vec<f64>,
+    /// The evidence model the map will be read under ([`crate::evidence`]): the other
+    /// blocks' belief is scored as that map would state it — `softmax(τ(n) · τ · Σ ln ℓ)`,
+    /// `n` the frames trained on — so the chosen τ is a correction *on top of* the model.
+    /// Fitting under eq. 2.10 for a map read under `shared` corrected twice (issue 35).
+    #[serde(default)]
+    pub evidence: EvidenceModel,
 }
 
 impl Default for TemperOptions {
@@ -153,6 +163,7 @@ impl Default for TemperOptions {
         Self {
             folds: 5,
             grid: default_grid(),
+            evidence: EvidenceModel::Independent,
         }
     }
 }
@@ -172,6 +183,13 @@ impl TemperOptions {
         self
     }
 
+    /// Sets the evidence model the fitted map is read under.
+    #[must_use]
+    pub fn evidence(mut self, evidence: EvidenceModel) -> Self {
+        self.evidence = evidence;
+        self
+    }
+
     fn validate(&self) -> Result<()> {
         if self.folds < 2 {
             return Err(PqrmError::InvalidConfig(format!(
@@ -182,6 +200,7 @@ impl TemperOptions {
         if self.grid.is_empty() {
             return Err(PqrmError::InvalidConfig("empty τ grid".into()));
         }
+        self.evidence.validate()?;
         if let Some(v) = self
             .grid
             .iter()
@@ -365,6 +384,10 @@ type Unit = (Vec<Vec<f64>>, Vec<f64>, u32);
 
 /// A triplet's belief trained on every block but `b`, under each τ of the grid: a new unit.
 fn trained_unit(e: &BlockSums, b: usize, q: usize, k: usize, options: &TemperOptions) -> Unit {
+    // the map of the other blocks reads its sum with the evidence model's exponent for the
+    // frames it holds
+    let trained: u32 = (0..k).filter(|&bb| bb != b).map(|bb| e.frames[bb]).sum();
+    let model = options.evidence.exponent(trained);
     let train: Vec<f64> = (0..q)
         .map(|s| {
             (0..k)
@@ -377,7 +400,7 @@ fn trained_unit(e: &BlockSums, b: usize, q: usize, k: usize, options: &TemperOpt
         .grid
         .iter()
         .map(|tau| {
-            normalise(train.iter().map(|v| tau * v).collect())
+            normalise(train.iter().map(|v| model * (tau * v)).collect())
                 .into_iter()
                 .map(f64::exp)
                 .collect()

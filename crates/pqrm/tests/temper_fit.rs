@@ -6,7 +6,7 @@ use std::collections::BTreeMap;
 
 use pqrm::calibration::calibration;
 use pqrm::temper::{TemperOptions, fit_temper};
-use pqrm::{GroundTruth, LandmarkId, Observation, Pqrm, PqrmConfig, Scan};
+use pqrm::{EvidenceModel, GroundTruth, LandmarkId, Observation, Pqrm, PqrmConfig, Scan};
 use qsr_core::Calculus;
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -209,5 +209,106 @@ fn too_few_frames_or_nothing_to_predict_is_a_typed_error() {
     assert!(
         fit_temper(&[], &scans, config(), &TemperOptions::default(), &|| {}).is_err(),
         "no calculus"
+    );
+}
+
+/// The held-out score the fit should give τ, recomputed from maps built through the public
+/// API: for each block `b` of `k`, a map of every frame outside `b` (each frame's counts drawn
+/// as the mapper draws frame `i`) read under `model` with exponent τ, and each held-out frame
+/// of a set that map holds scored by `ln((1 − ε)·Σ p·ℓ + ε/Q)`; means per (set, block), summed,
+/// the best ε, divided by the units.
+fn map_score(calculus: &Calculus, scans: &[Scan], model: EvidenceModel, k: usize, tau: f64) -> f64 {
+    use pqrm::likelihood::{log_likelihood, step_counts};
+    let cfg = PqrmConfig {
+        temper: tau,
+        ..config()
+    };
+    let counts_of = |i: usize| {
+        let samples =
+            pqrm::ScanSamples::draw_with(&scans[i], cfg.samples, cfg.seed, i as u64, cfg.sensor);
+        step_counts(calculus, &samples, cfg.orderings).unwrap()
+    };
+    let n = scans.len();
+    let block = |i: usize| i * k / n;
+    let grid = pqrm::temper::OUTLIER_GRID;
+    let (mut totals, mut units) = (vec![0.0; grid.len()], 0usize);
+    for b in 0..k {
+        let mut m = Pqrm::new(calculus.clone(), cfg)
+            .unwrap()
+            .with_evidence(model)
+            .unwrap();
+        for i in (0..n).filter(|&i| block(i) != b) {
+            m.apply_counts(&counts_of(i)).unwrap();
+        }
+        let mut per_set: BTreeMap<pqrm::LandmarkSet, (Vec<f64>, u32)> = BTreeMap::new();
+        for i in (0..n).filter(|&i| block(i) == b) {
+            for (set, c) in &counts_of(i) {
+                let Some(p) = m.belief(set) else { continue };
+                let seen = log_likelihood(c, cfg.floor.max(pqrm::temper::SCORE_FLOOR));
+                let pred: f64 = p.iter().zip(&seen).map(|(p, l)| p * l.exp()).sum();
+                let e = per_set
+                    .entry(set)
+                    .or_insert_with(|| (vec![0.0; grid.len()], 0));
+                for (s, eps) in e.0.iter_mut().zip(grid) {
+                    let mixed = (1.0 - eps) * pred + eps / c.len() as f64;
+                    *s += mixed.max(f64::MIN_POSITIVE).ln();
+                }
+                e.1 += 1;
+            }
+        }
+        for (sums, frames) in per_set.into_values() {
+            units += 1;
+            for (t, s) in totals.iter_mut().zip(sums) {
+                *t += s / f64::from(frames);
+            }
+        }
+    }
+    totals.into_iter().fold(f64::NEG_INFINITY, f64::max) / units as f64
+}
+
+/// Regression (issue 35): τ was fitted under eq. 2.10 while the map it was for is read under
+/// the shared-error model, so `--temper auto` corrected twice. The fit must score each τ as
+/// the map it chooses for would state its beliefs, under either model.
+#[test]
+fn the_fit_scores_the_map_it_is_for_under_each_evidence_model() {
+    let edc = Calculus::builtin("double-cross").unwrap();
+    let (scans, _) = recording(5, 10, 2);
+    let grid = vec![1.0, 0.5, 0.25];
+    let mut at_one = Vec::new();
+    for model in [
+        EvidenceModel::Independent,
+        EvidenceModel::Shared { frames: 4.0 },
+        EvidenceModel::Shared {
+            frames: f64::INFINITY,
+        },
+    ] {
+        let options = TemperOptions::default()
+            .folds(4)
+            .grid(grid.clone())
+            .evidence(model);
+        let fit = fit_temper(
+            std::slice::from_ref(&edc),
+            &scans,
+            config(),
+            &options,
+            &|| {},
+        )
+        .unwrap()
+        .remove(0);
+        for s in &fit.scores {
+            let want = map_score(&edc, &scans, model, 4, s.temper);
+            assert!(
+                (s.log_score - want).abs() < 1e-3 * want.abs().max(1.0),
+                "{model:?} τ {}: the fit scored {} where the map it is for scores {want}",
+                s.temper,
+                s.log_score
+            );
+        }
+        at_one.push(fit.scores[0].log_score);
+    }
+    // the models state different beliefs, so a fit blind to the model could not pass above
+    assert!(
+        (at_one[0] - at_one[1]).abs() > 0.01 && (at_one[0] - at_one[2]).abs() > 0.01,
+        "{at_one:?}"
     );
 }

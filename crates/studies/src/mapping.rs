@@ -310,7 +310,8 @@ impl MapJob {
                     std::slice::from_ref(&self.calculus),
                     &data.scans,
                     config,
-                    &TemperOptions::default(),
+                    // the τ is chosen on top of the evidence model the map is read under
+                    &TemperOptions::default().evidence(self.evidence),
                     &|| progress.tick(),
                 )
                 .map_err(|e| match e {

@@ -432,7 +432,14 @@ fn main_run(c: &RealDataConfig, rec: Recording, progress: &dyn Progress) -> Resu
     // τ chosen from the data is always measured (the report compares it with τ = 1); the
     // main run uses it only with `temper = "auto"`.
     let fitted_or_not = phase(progress, fit_units, |p| {
-        fit_temper(&calcs, &data.scans, config, &TemperOptions::default(), p)
+        // fitted under the model the main run reads its maps with (the τ is on top of it)
+        fit_temper(
+            &calcs,
+            &data.scans,
+            config,
+            &TemperOptions::default().evidence(c.evidence),
+            p,
+        )
     });
     let (fits, tempering_failed) = match fitted_or_not {
         Ok(f) => (Some(f), None),

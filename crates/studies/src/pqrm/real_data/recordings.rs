@@ -133,7 +133,7 @@ pub fn score_recording(
                     &calcs,
                     &rec.data.scans,
                     config.pqrm_config(),
-                    &TemperOptions::default(),
+                    &TemperOptions::default().evidence(c.evidence),
                     p,
                 )
             })?;

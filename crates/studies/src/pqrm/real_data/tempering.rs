@@ -67,7 +67,8 @@ pub(super) fn tempering_table(t: &Tempering) -> Table {
         "Eq. 2.10 counts every frame as independent evidence; frames of a robot standing still, or of one \
          geometry seen again and again, are not. τ is chosen per calculus without ground truth: the frames are cut into contiguous blocks, \
          each held out once, and τ is the exponent under which the other blocks' map best predicts the held-out frames (mean log predictive \
-         probability; `temper.csv`, `temper_fit.svg`). Tempering changes no most-likely state — the error is the same — only how sure the map says it is. \
+         probability; `temper.csv`, `temper_fit.svg`), read under the report's evidence model, so τ is a correction on top of that model \
+         (both columns use it). Tempering changes no most-likely state — the error is the same — only how sure the map says it is. \
          The chosen τ lowers or keeps the expected calibration error for {better} of {} calculi. The criterion assumes that frames err \
          independently given the geometry (then it finds the τ a ground truth would pick: `crates/pqrm/tests/temper_fit.rs`); errors shared by \
          neighbouring frames make it hedge, and a fitted noise may already absorb them.",
