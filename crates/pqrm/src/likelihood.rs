@@ -270,6 +270,17 @@ pub fn step_counts(
     samples: &ScanSamples,
     orderings: Orderings,
 ) -> Result<StepCounts> {
+    step_counts_with(calculus, samples, orderings, true)
+}
+
+/// [`step_counts`], with the fused key loops or without (`fused = false`: the pass per
+/// quantity every calculus can take).
+fn step_counts_with(
+    calculus: &Calculus,
+    samples: &ScanSamples,
+    orderings: Orderings,
+    fused: bool,
+) -> Result<StepCounts> {
     let ids = samples.ids();
     let m = ids.len();
     let q = calculus.n_states();
@@ -278,7 +289,7 @@ pub fn step_counts(
         Orderings::Canonical => 1,
     };
     // the keys' state table is built once per step, not per triplet
-    let forms = SixForms::new(calculus, n_orders);
+    let forms = SixForms::new(calculus, n_orders).map(|f| SixForms { fused, ..f });
     let forms = forms.as_ref();
     // parallel over the pairs (i, j): tasks of m − j − 1 triplets each balance the two
     // cores far better than one task per first landmark (m − 1 − i pairs, very unequal)
@@ -416,6 +427,24 @@ fn base_sample(a: [f64; 2], b: [f64; 2], c: [f64; 2], tol2: f64) -> ([f64; 4], b
     let ab = len2 > tol2 * (1.0 + a2 + b2);
     let c_apart = (n * len2 > tol2 * (1.0 + a2 + c2)) & (m * len2 > tol2 * (1.0 + b2 + c2));
     ([x, y, n, m], ab, c_apart)
+}
+
+/// The exact coincidence checks of samples `range` (where the conservative bounds failed).
+fn check_apart<const ORDERS: usize>(
+    samples: &ScanSamples,
+    [i, j, k]: [usize; 3],
+    range: std::ops::Range<usize>,
+) -> Result<()> {
+    let tol2 = qsr_core::DEGENERATE_TOLERANCE * qsr_core::DEGENERATE_TOLERANCE;
+    let ((ax, ay), (bx, by), (cx, cy)) =
+        (samples.columns(i), samples.columns(j), samples.columns(k));
+    for u in range {
+        let (_, ab, c_apart) = base_sample([ax[u], ay[u]], [bx[u], by[u]], [cx[u], cy[u]], tol2);
+        if !(ab & (ORDERS == 1 || c_apart)) {
+            return Err(coincident(samples, [i, j, k]));
+        }
+    }
+    Ok(())
 }
 
 /// The error for a triplet with two coincident landmarks in a sample.
@@ -621,6 +650,56 @@ struct SixForms {
     /// The orderings' states for each key with no quantity zero (bit g: quantity g > 0);
     /// `orders` of the six are used.
     states: Vec<[u16; 6]>,
+    /// The quantities grouped by kind for the fused key loop ([`fused_keys`]).
+    grouped: Grouped,
+    /// Whether the fused loop is used where the shape has one (false only in the test that
+    /// compares the two loops).
+    fused: bool,
+}
+
+/// The quantities of a [`SixForms`] grouped by kind — single-term ones on `n`, on `x`, on
+/// `y`, then general forms — each with its key bits, so that a loop specialised to the
+/// group sizes ([`fused_keys`]) takes every sign with no per-quantity choice left to run
+/// time. The sizes of the built-in calculi are dispatched to such loops (see
+/// [`fused_dispatch`]); a calculus of another shape keeps the pass-per-quantity loop.
+#[derive(Debug, Clone, Default)]
+struct Grouped {
+    /// Thresholds of the single-term quantities on `n`, `x`, `y`.
+    t: [Vec<f64>; 3],
+    /// Their key bits (the quantity's index).
+    t_bit: [Vec<u32>; 3],
+    /// Coefficients of the general forms and their key bits.
+    coef: Vec<[f64; 4]>,
+    coef_bit: Vec<u32>,
+}
+
+impl Grouped {
+    fn new(quantities: &[Quantity]) -> Self {
+        let mut g = Self::default();
+        for (bit, q) in quantities.iter().enumerate() {
+            match *q {
+                Quantity::Single { var, t } => {
+                    g.t[var].push(t);
+                    g.t_bit[var].push(bit as u32);
+                }
+                Quantity::General { coef } => {
+                    g.coef.push(coef);
+                    g.coef_bit.push(bit as u32);
+                }
+            }
+        }
+        g
+    }
+
+    /// `[on n, on x, on y, general]`.
+    fn shape(&self) -> [usize; 4] {
+        [
+            self.t[0].len(),
+            self.t[1].len(),
+            self.t[2].len(),
+            self.coef.len(),
+        ]
+    }
 }
 
 /// A quantity whose sign decides forms: `u − t` (`u` = `[n, x, y][var]`, compared, never
@@ -745,11 +824,14 @@ impl SixForms {
                 out
             })
             .collect();
+        let grouped = Grouped::new(&quantities);
         Some(Self {
             orders,
             quantities,
             members,
             states,
+            grouped,
+            fused: true,
         })
     }
 
@@ -760,6 +842,119 @@ impl SixForms {
             acc | usize::from(s > 0 || (s == 0 && m.inclusive)) << m.bit
         })
     }
+}
+
+/// One chunk of samples from their coordinates to their keys in one pass, specialised to
+/// the group sizes of [`Grouped`]: each sample's base frame stays in registers and every
+/// quantity's sign is taken there (bit `b`: quantity `b` > 0, bit `32 + b`: exactly zero),
+/// so the loop vectorises over samples with nothing stored between passes and nothing
+/// chosen per quantity at run time. The arithmetic is [`base_frame`]'s and [`fill_keys`]'s,
+/// operation for operation: the keys are the same bits. Returns whether every sample passed
+/// the conservative coincidence bounds.
+#[inline(always)]
+fn fused_keys<
+    const ORDERS: usize,
+    const NN: usize,
+    const NX: usize,
+    const NY: usize,
+    const NG: usize,
+>(
+    grouped: &Grouped,
+    [ax, ay, bx, by, cx, cy]: [&[f64]; 6],
+    apart: Apart,
+    key: &mut [u64],
+) -> bool {
+    fn take<const N: usize, T: Copy + Default>(v: &[T]) -> [T; N] {
+        let mut out = [T::default(); N];
+        out.iter_mut().zip(v).for_each(|(o, v)| *o = *v);
+        out
+    }
+    // a quantity's bits: where it is positive, where it is exactly zero
+    fn bits<const N: usize>(b: &[u32]) -> ([u64; N], [u64; N]) {
+        let at = |i: usize| b.get(i).copied().unwrap_or(0);
+        (
+            std::array::from_fn(|i| 1u64 << at(i)),
+            std::array::from_fn(|i| 1u64 << (32 + at(i))),
+        )
+    }
+    let (tn, tx, ty): ([f64; NN], [f64; NX], [f64; NY]) = (
+        take(&grouped.t[0]),
+        take(&grouped.t[1]),
+        take(&grouped.t[2]),
+    );
+    let coef: [[f64; 4]; NG] = take(&grouped.coef);
+    let (gn, zn) = bits::<NN>(&grouped.t_bit[0]);
+    let (gx, zx) = bits::<NX>(&grouped.t_bit[1]);
+    let (gy, zy) = bits::<NY>(&grouped.t_bit[2]);
+    let (gg, zg) = bits::<NG>(&grouped.coef_bit);
+    let len = key.len();
+    let (ax, ay, bx, by, cx, cy) = (
+        &ax[..len],
+        &ay[..len],
+        &bx[..len],
+        &by[..len],
+        &cx[..len],
+        &cy[..len],
+    );
+    let mut valid = true;
+    for u in 0..len {
+        let ([x, y, n, mm], len2) = base_frame([ax[u], ay[u]], [bx[u], by[u]], [cx[u], cy[u]]);
+        // the canonical ordering alone needs only A ≠ B; the others use C as a reference
+        valid &=
+            (len2 > apart.ab) & (ORDERS == 1 || ((n * len2 > apart.ac) & (mm * len2 > apart.bc)));
+        let mut k = 0u64;
+        for i in 0..NN {
+            k |= (if n > tn[i] { gn[i] } else { 0 }) | (if n == tn[i] { zn[i] } else { 0 });
+        }
+        for i in 0..NX {
+            k |= (if x > tx[i] { gx[i] } else { 0 }) | (if x == tx[i] { zx[i] } else { 0 });
+        }
+        for i in 0..NY {
+            k |= (if y > ty[i] { gy[i] } else { 0 }) | (if y == ty[i] { zy[i] } else { 0 });
+        }
+        for i in 0..NG {
+            let [fa, fb, fc, fd] = coef[i];
+            let v = fa * n + fb * x + fc * y + fd;
+            k |= (if v > 0.0 { gg[i] } else { 0 }) | (if v == 0.0 { zg[i] } else { 0 });
+        }
+        key[u] = k;
+    }
+    valid
+}
+
+/// [`fused_keys`] for `shape` if it has a loop of its own (`None` otherwise): the shapes
+/// of the built-in ternary calculi, all orderings and the canonical one
+/// (`every_builtin_has_a_fused_loop` keeps the list complete).
+#[inline(always)]
+fn fused_dispatch<const ORDERS: usize>(
+    shape: [usize; 4],
+    grouped: &Grouped,
+    coords: [&[f64]; 6],
+    apart: Apart,
+    key: &mut [u64],
+) -> Option<bool> {
+    macro_rules! shapes {
+        ($([$a:literal, $b:literal, $c:literal, $d:literal]),*) => {
+            match shape {
+                $([$a, $b, $c, $d] => Some(fused_keys::<ORDERS, $a, $b, $c, $d>(grouped, coords, apart, key)),)*
+                _ => None,
+            }
+        };
+    }
+    // the built-in ternary calculi's shapes (all orderings; canonical)
+    shapes!(
+        [1, 1, 3, 2], // edc, edc-lune, triple-cross
+        [1, 1, 3, 1], // edc, edc-lune (canonical)
+        [0, 1, 3, 0], // triple-cross (canonical)
+        [0, 1, 2, 1], // double-cross, single-cross
+        [0, 1, 2, 0], // double-cross (canonical)
+        [1, 1, 1, 1], // quadrant
+        [0, 1, 1, 0], // quadrant, single-cross (canonical)
+        [0, 1, 0, 0], // left-right
+        [1, 0, 1, 1], // relative-distance
+        [1, 0, 0, 0], // relative-distance (canonical)
+        [0, 1, 1, 3]  // tpcc (canonical; all orderings exceed the key's quantities)
+    )
 }
 
 /// Each sample's key from its frame `(x, y, n)`: bit `b` says quantity `b` is positive,
@@ -900,10 +1095,29 @@ fn six_counts<const ORDERS: usize>(
         return Err(PqrmError::InvalidConfig("six_counts: scratch".into()));
     };
     // key lanes: bit g = quantity g > 0, bit 32 + g = quantity g == 0
-    let tol2 = qsr_core::DEGENERATE_TOLERANCE * qsr_core::DEGENERATE_TOLERANCE;
     let mut signs = vec![0i8; g];
+    let (shape, fused) = (forms.grouped.shape(), forms.fused);
     for start in (0..s).step_by(CHUNK) {
         let len = CHUNK.min(s - start);
+        let range = start..start + len;
+        let coords = [
+            &ax[range.clone()],
+            &ay[range.clone()],
+            &bx[range.clone()],
+            &by[range.clone()],
+            &cx[range.clone()],
+            &cy[range],
+        ];
+        if fused
+            && let Some(valid) =
+                fused_dispatch::<ORDERS>(shape, &forms.grouped, coords, apart, &mut keys[..len])
+        {
+            if !valid {
+                check_apart::<ORDERS>(samples, [i, j, k], start..start + len)?;
+            }
+            count_keys::<ORDERS>(forms, (table, q), &keys[..len], hist, &mut signs, out);
+            continue;
+        }
         let mut valid = true;
         for t in 0..len {
             let u = start + t;
@@ -916,14 +1130,7 @@ fn six_counts<const ORDERS: usize>(
             ns[t] = n;
         }
         if !valid {
-            // the bounds are conservative: the exact checks decide
-            for u in start..start + len {
-                let (_, ab, c_apart) =
-                    base_sample([ax[u], ay[u]], [bx[u], by[u]], [cx[u], cy[u]], tol2);
-                if !(ab & (ORDERS == 1 || c_apart)) {
-                    return Err(coincident(samples, [i, j, k]));
-                }
-            }
+            check_apart::<ORDERS>(samples, [i, j, k], start..start + len)?;
         }
         let (x, y, n) = (&xs[..len], &ys[..len], &ns[..len]);
         let key = &mut keys[..len];
@@ -971,6 +1178,82 @@ pub fn log_likelihood(counts: &[u32], floor: f64) -> Vec<f64> {
 #[cfg(test)]
 mod tests {
     use super::LandmarkSet;
+
+    /// Every built-in ternary calculus has a fused key loop for its shape, all orderings and
+    /// the canonical one — a new calculus whose shape is missing fails here, not silently.
+    #[test]
+    fn every_builtin_has_a_fused_loop() {
+        let mut missing = Vec::new();
+        for name in qsr_core::BUILTIN_NAMES {
+            let cal = qsr_core::Calculus::builtin(name).expect("built in");
+            if cal.frame() != qsr_core::FrameKind::Ternary {
+                continue;
+            }
+            for orders in [6, 1] {
+                let Some(forms) = super::SixForms::new(&cal, orders) else {
+                    continue;
+                };
+                let shape = forms.grouped.shape();
+                let apart = super::Apart::new([0.0; 3]);
+                let got =
+                    super::fused_dispatch::<1>(shape, &forms.grouped, [&[]; 6], apart, &mut []);
+                if got.is_none() {
+                    missing.push(format!("{name}, {orders} orderings: {shape:?}"));
+                }
+            }
+        }
+        assert!(
+            missing.is_empty(),
+            "shapes with no fused loop: {missing:#?}"
+        );
+    }
+
+    /// The fused loops give the pass-per-quantity loop's counts, bit for bit, for every
+    /// built-in, both orderings, on samples that visit every state and on a lattice that puts
+    /// samples exactly on boundaries.
+    #[test]
+    fn fused_and_per_quantity_loops_count_alike() {
+        use crate::{LandmarkId, Observation, Scan, ScanSamples};
+        let noisy: Vec<Observation> = (0..7u32)
+            .map(|i| {
+                let p = [f64::from(i % 3) * 0.7, f64::from(i / 3) * 0.9 - 0.4];
+                Observation::isotropic(LandmarkId(i), p, 0.6).expect("valid")
+            })
+            .collect();
+        let lattice: Vec<Observation> = [
+            [0.0, 0.0],
+            [2.0, 0.0],
+            [1.0, 0.0],
+            [2.0, 2.0],
+            [0.0, 2.0],
+            [1.0, 1.0],
+            [1.0, -1.0],
+        ]
+        .iter()
+        .enumerate()
+        .map(|(i, p)| Observation::isotropic(LandmarkId(i as u32), *p, 0.0).expect("valid"))
+        .collect();
+        for (obs, s) in [(noisy, 700), (lattice, 9)] {
+            let scan = Scan::new(0.0, 0, obs).expect("valid");
+            let samples = ScanSamples::draw(&scan, s, 3, 0);
+            let mut tried = 0;
+            for name in qsr_core::BUILTIN_NAMES {
+                let cal = qsr_core::Calculus::builtin(name).expect("built in");
+                if cal.frame() != qsr_core::FrameKind::Ternary {
+                    continue;
+                }
+                for orderings in [super::Orderings::All, super::Orderings::Canonical] {
+                    let fused =
+                        super::step_counts_with(&cal, &samples, orderings, true).expect("apart");
+                    let plain =
+                        super::step_counts_with(&cal, &samples, orderings, false).expect("apart");
+                    assert_eq!(fused.counts, plain.counts, "{name} {orderings:?}");
+                    tried += 1;
+                }
+            }
+            assert_eq!(tried, 18, "the ternary built-ins, both orderings");
+        }
+    }
 
     #[test]
     fn a_set_parses_from_three_distinct_ids_and_nothing_else() {
