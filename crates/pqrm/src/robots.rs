@@ -14,24 +14,25 @@ use std::collections::{BTreeMap, BTreeSet};
 use serde::{Deserialize, Serialize};
 
 use crate::error::{PqrmError, Result};
+use crate::evidence::EvidenceModel;
 use crate::likelihood::LandmarkSet;
 use crate::loaders::Dataset;
 use crate::map::{Pqrm, PqrmConfig};
 use crate::metrics::{GroundTruth, MapMetrics, evaluate};
 use qsr_core::Calculus;
 
-/// Maps one robot's scans (all scans when `robot` is `None`).
+/// Maps one robot's scans (all scans when `robot` is `None`), read under `evidence`.
 ///
 /// # Errors
-/// Mapper errors.
+/// Mapper errors; an invalid evidence model.
 pub fn map_scans(
     dataset: &Dataset,
     calculus: &Calculus,
-    config: PqrmConfig,
+    (config, evidence): (PqrmConfig, EvidenceModel),
     robot: Option<u32>,
     progress: &dyn Progress,
 ) -> Result<Pqrm> {
-    let mut map = Pqrm::new(calculus.clone(), config)?;
+    let mut map = Pqrm::new(calculus.clone(), config)?.with_evidence(evidence)?;
     for scan in dataset
         .scans
         .iter()
@@ -108,7 +109,8 @@ fn error_on(map: &Pqrm, truth: &GroundTruth, sets: &BTreeSet<LandmarkSet>) -> Re
 
 /// Compares each robot alone, all robots pooled and the robots' maps merged, per calculus;
 /// each calculus's maps are tempered by its exponent in `tempers` (one per calculus, in
-/// order; `config.temper` is ignored).
+/// order; `config.temper` is ignored) and read under `evidence` — a merged map keeps the
+/// summed evidence and the summed frame counts, so it reads as the pooled map does.
 ///
 /// # Errors
 /// [`PqrmError::Mismatch`] without ground truth or with fewer than two robots;
@@ -116,7 +118,7 @@ fn error_on(map: &Pqrm, truth: &GroundTruth, sets: &BTreeSet<LandmarkSet>) -> Re
 pub fn compare_robots(
     dataset: &Dataset,
     calculi: &[Calculus],
-    config: PqrmConfig,
+    (config, evidence): (PqrmConfig, EvidenceModel),
     tempers: &[f64],
     progress: &dyn Progress,
 ) -> Result<Vec<RobotComparison>> {
@@ -140,9 +142,9 @@ pub fn compare_robots(
         let config = PqrmConfig { temper, ..config };
         let singles = scans_of
             .keys()
-            .map(|r| map_scans(dataset, calc, config, Some(*r), progress))
+            .map(|r| map_scans(dataset, calc, (config, evidence), Some(*r), progress))
             .collect::<Result<Vec<_>>>()?;
-        let pooled = map_scans(dataset, calc, config, None, progress)?;
+        let pooled = map_scans(dataset, calc, (config, evidence), None, progress)?;
         let merged = merge_maps(&singles)?;
         let (mut agree, mut tv, mut n) = (0usize, 0.0, 0usize);
         for (set, b) in pooled.iter() {
@@ -237,17 +239,66 @@ mod tests {
             samples: 4000,
             ..PqrmConfig::default()
         };
-        let r = compare_robots(&data, &[calc], config, &[1.0], &|| ()).unwrap();
-        let r = &r[0];
-        assert_eq!(r.robots.len(), 3);
-        assert_eq!(r.merged.n_sets, r.pooled.n_sets);
-        assert!(r.ml_agreement > 0.97, "ML agreement {}", r.ml_agreement);
-        assert!(
-            r.mean_total_variation < 0.03,
-            "merged and pooled beliefs differ by TV {}",
-            r.mean_total_variation
+        // under eq. 2.10 and under the shared-error model (issue 35: the comparison ran eq.
+        // 2.10 only): a merged map sums the frame counts, so it reads as the pool does
+        for evidence in [EvidenceModel::Independent, EvidenceModel::shared_default()] {
+            let r = compare_robots(
+                &data,
+                std::slice::from_ref(&calc),
+                (config, evidence),
+                &[1.0],
+                &|| (),
+            )
+            .unwrap();
+            let r = &r[0];
+            assert_eq!(r.robots.len(), 3);
+            assert_eq!(r.merged.n_sets, r.pooled.n_sets);
+            assert!(
+                r.ml_agreement > 0.97,
+                "{evidence:?}: ML agreement {}",
+                r.ml_agreement
+            );
+            assert!(
+                r.mean_total_variation < 0.03,
+                "{evidence:?}: merged and pooled beliefs differ by TV {}",
+                r.mean_total_variation
+            );
+            assert!((r.merged.error_rate - r.pooled.error_rate).abs() < 0.03);
+        }
+    }
+
+    #[test]
+    fn the_comparison_reads_its_maps_under_the_evidence_model_it_is_given() {
+        // the shared model softens the beliefs of sets seen many times: the pooled map's
+        // mean entropy must rise over eq. 2.10's, the most likely states stay
+        let data = three_robots();
+        let calc = Calculus::builtin("double-cross").unwrap();
+        let config = PqrmConfig {
+            samples: 1000,
+            ..PqrmConfig::default()
+        };
+        let run = |evidence| {
+            compare_robots(
+                &data,
+                std::slice::from_ref(&calc),
+                (config, evidence),
+                &[1.0],
+                &|| (),
+            )
+            .unwrap()
+            .remove(0)
+        };
+        let (plain, shared) = (
+            run(EvidenceModel::Independent),
+            run(EvidenceModel::shared_default()),
         );
-        assert!((r.merged.error_rate - r.pooled.error_rate).abs() < 0.03);
+        assert!(
+            shared.pooled.mean_entropy > plain.pooled.mean_entropy + 0.01,
+            "{} vs {}",
+            shared.pooled.mean_entropy,
+            plain.pooled.mean_entropy
+        );
+        assert_eq!(shared.pooled.error_rate, plain.pooled.error_rate);
     }
 
     #[test]
@@ -260,8 +311,9 @@ mod tests {
             samples: 4000,
             ..PqrmConfig::default()
         };
-        let one = map_scans(&data, &calc, config, Some(1), &|| ()).unwrap();
-        let pooled = map_scans(&data, &calc, config, None, &|| ()).unwrap();
+        let plain = (config, EvidenceModel::Independent);
+        let one = map_scans(&data, &calc, plain, Some(1), &|| ()).unwrap();
+        let pooled = map_scans(&data, &calc, plain, None, &|| ()).unwrap();
         let tv: f64 = pooled
             .iter()
             .map(|(s, b)| {

@@ -461,7 +461,7 @@ fn main_run(c: &RealDataConfig, rec: Recording, progress: &dyn Progress) -> Resu
     })?;
     let robots = phase(progress, robot_units, |p| {
         if robot_units > 0 {
-            compare_robots(data, &calcs, config, &tempers, p)
+            compare_robots(data, &calcs, (config, c.evidence), &tempers, p)
         } else {
             Ok(Vec::new())
         }
