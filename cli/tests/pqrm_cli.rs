@@ -726,10 +726,10 @@ fn repeated_frames_csv(path: &Path, n: usize, repeat: usize) {
 #[test]
 fn map_chooses_tau_from_the_data_and_sees_through_repeated_frames() {
     let dir = tmp("temper");
-    let chosen = |repeat: usize| {
+    let chosen = |repeat: usize, evidence: &str| {
         let input = dir.join(format!("x{repeat}.csv"));
         repeated_frames_csv(&input, 30, repeat);
-        let out = dir.join(format!("out{repeat}"));
+        let out = dir.join(format!("out{repeat}-{evidence}"));
         let o = qrm(
             &[
                 "map",
@@ -743,6 +743,8 @@ fn map_chooses_tau_from_the_data_and_sees_through_repeated_frames() {
                 "200",
                 "--temper",
                 "auto",
+                "--evidence",
+                evidence,
                 "--out",
                 out.to_str().unwrap(),
             ],
@@ -772,10 +774,19 @@ fn map_chooses_tau_from_the_data_and_sees_through_repeated_frames() {
         );
         tau
     };
-    let (once, five) = (chosen(1), chosen(5));
+    // Under eq. 2.10 every copy counts: τ must fall by about the repeat.
+    let (once, five) = (chosen(1, "independent"), chosen(5, "independent"));
     assert!(
         five * 2.8 <= once,
         "τ {five} for each frame five times vs {once} for each once"
+    );
+    // Under the shared-error model (the default) the model already discounts a set's n
+    // frames, and τ is fitted on top of it (issue 35): it must not repeat eq. 2.10's
+    // correction (before the fix it was the same τ as above).
+    let five_shared = chosen(5, "shared");
+    assert!(
+        five_shared >= 2.0 * five,
+        "τ {five_shared} on top of the shared model vs {five} under eq. 2.10: corrected twice"
     );
     // Too few frames to hold any out: a typed error, nothing written.
     let input = dir.join("short.csv");
