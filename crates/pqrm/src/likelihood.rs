@@ -496,8 +496,8 @@ fn triplet_counts(
 }
 
 /// [`triplet_counts`] compiled for AVX-512 (eight doubles per operation, compare masks in
-/// mask registers): 10–20 % faster than the AVX2 build where the CPU has it (measured with
-/// `cargo run --release -p pqrm --example step_timing`), the same operations in the same
+/// mask registers): about 12 % faster than the AVX2 build where the CPU has it (0.95–0.98
+/// against 1.08–1.13 ms, `cargo run --release -p pqrm --example step_timing`), the same operations in the same
 /// order.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx512f,avx512dq,avx512vl,avx512bw")]
