@@ -37,7 +37,8 @@ pub struct StudyArgs {
     /// The trials to run.
     #[arg(long, value_enum, default_value_t = TrialsArg::All)]
     pub trial: TrialsArg,
-    /// Ordered start/goal pairs per setting (default: all 39,800; quick: 400).
+    /// Ordered start/goal pairs per setting (default: all 39,800; quick: 400); the rows of
+    /// further sensing schedules and of the robot's ablations run at most as many.
     #[arg(long)]
     pub pairs: Option<usize>,
     /// Idealised: plan with the true positions of references the robot does not see
@@ -81,6 +82,7 @@ fn study(a: StudyArgs) -> Result<()> {
     if a.pairs.is_some() {
         config.pairs = a.pairs;
         config.schedule_pairs = a.pairs.map(|p| p.min(config.schedule_pairs.unwrap_or(p)));
+        config.ablation_pairs = a.pairs.map(|p| p.min(config.ablation_pairs.unwrap_or(p)));
     }
     if a.oracle_references {
         config.references = References::Oracle;

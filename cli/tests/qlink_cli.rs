@@ -31,7 +31,7 @@ fn quick_study_writes_table_4_1() {
     assert_eq!(
         lines.next(),
         Some(
-            "trial,value,schedule,pairs,no_path,failures,failure_rate,thesis_failure_rate,mean_length,over_prop2_bound"
+            "trial,value,schedule,robot,pairs,no_path,failures,failure_rate,thesis_failure_rate,mean_length,over_prop2_bound,over_prop2_bound_trajectory"
         )
     );
     let all: Vec<Vec<String>> = lines
@@ -45,13 +45,30 @@ fn quick_study_writes_table_4_1() {
             v
         })
         .collect();
-    // 9 main rows, and the 4 occlusion sizes under 3 further schedules
-    assert_eq!(all.len(), 21);
+    // 9 main rows, the 4 occlusion sizes under 3 further schedules, and R' = 0.9 R with the
+    // robot's errors removed in 5 ways (the default robot reports nothing false)
+    assert_eq!(all.len(), 26);
+    let ablations: Vec<&str> = all
+        .iter()
+        .filter(|r| r[3] != "full")
+        .map(|r| r[3].as_str())
+        .collect();
+    assert_eq!(
+        ablations,
+        [
+            "exact",
+            "without-misses",
+            "without-detection-noise",
+            "without-motion-noise",
+            "motion-only"
+        ]
+    );
     let rows: Vec<Vec<String>> = all
         .iter()
-        .filter(|r| r[2] == "continuous, 1 fallback")
+        .filter(|r| r[2] == "continuous, 1 fallback" && r[3] == "full")
         .map(|r| {
             let mut r = r.clone();
+            r.remove(3);
             r.remove(2);
             r
         })
@@ -61,7 +78,7 @@ fn quick_study_writes_table_4_1() {
     let sparse: usize = all
         .iter()
         .filter(|r| r[2] == "stops every 30°, 0 fallbacks")
-        .map(|r| r[5].parse::<usize>().unwrap())
+        .map(|r| r[6].parse::<usize>().unwrap())
         .sum();
     assert!(sparse > 0, "{all:?}");
     let report = std::fs::read_to_string(out.join("report.md")).unwrap();

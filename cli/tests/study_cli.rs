@@ -43,6 +43,8 @@ fn the_alias_and_the_runner_write_the_same_files() {
             "pairs=30",
             "--set",
             "schedule_pairs=30",
+            "--set",
+            "ablation_pairs=30",
             "--seed",
             "2",
             "--out",

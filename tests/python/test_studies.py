@@ -43,7 +43,7 @@ def test_a_run_is_typed_and_judged(small_run):
     rows = next(t for t in report["tables"] if t["name"] == "table")["rows"]
     assert len(rows) == 2  # one per range factor
     claim = next(c for c in report["claims"] if c["what"].startswith("Failure rate as R'"))
-    ours = [r[6]["csv"] for r in rows]  # failure_rate, in full
+    ours = [r[7]["csv"] for r in rows]  # failure_rate, in full
     rising = float(ours[1]) > float(ours[0])
     assert claim["verdict"] == ("agree" if rising else "disagree"), (claim, ours)
     assert small_run["config"]["pairs"] == 30

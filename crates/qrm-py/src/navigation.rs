@@ -159,7 +159,12 @@ pub(crate) fn qlink_study(
         config.trial = trial;
         config.exact_robot = exact_robot;
         if pairs.is_some() {
+            // as `qrm qlink study --pairs`: the main rows' pairs, and at most as many in the
+            // further schedules' and ablations' rows
             config.pairs = pairs;
+            let at_most = |own: Option<usize>| pairs.map(|p| p.min(own.unwrap_or(p)));
+            config.schedule_pairs = at_most(config.schedule_pairs);
+            config.ablation_pairs = at_most(config.ablation_pairs);
         }
         let (records, _) = studies::qlink::table_4_1::run_study(&config, watch)?;
         let table = studies::qlink::table_4_1::table(&records);

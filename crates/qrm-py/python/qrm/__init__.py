@@ -302,10 +302,11 @@ def qlink_study(
     progress: Optional[Progress] = None,
     exact_robot: bool = False,
 ) -> types.QlinkStudy:
-    """The §4.4.1 study (Table 4.1): `{"table": [...], "records": [...]}`. `progress` counts
-    each world's map, a distance field per goal landmark and every navigation, its total known
-    before the first. The navigating robot errs (N(0, 0.3 m) detections, missed ones, wheel
-    slip) unless `exact_robot`."""
+    """The §4.4.1 study (Table 4.1): `{"table": [...], "records": [...]}`. `pairs` is per main
+    row, and at most as many in the rows of further sensing schedules and of ablations (whose
+    `robot` names the errors removed). `progress` counts each world's map, a distance field per goal landmark
+    and every navigation, its total known before the first. The navigating robot errs
+    (N(0, 0.3 m) detections, missed ones, wheel slip) unless `exact_robot`."""
     result: types.QlinkStudy = json.loads(
         _qrm.qlink_study(trial, quick, pairs, seed, progress=_progress_callback(progress),
                          exact_robot=exact_robot)

@@ -43,6 +43,7 @@ __all__ = [
     "QlinkRecord",
     "QlinkStudy",
     "QlinkTableRow",
+    "RobotAblation",
     "Schedule",
     "TaskDraws",
     "TransitionRecord",
@@ -313,6 +314,18 @@ class Schedule(TypedDict):
     fallbacks: int
 
 
+RobotAblation = Literal[
+    "full",
+    "exact",
+    "without-misses",
+    "without-detection-noise",
+    "without-false-reports",
+    "without-motion-noise",
+    "motion-only",
+]
+"""Which of the navigating robot's errors a row of the §4.4.1 study keeps."""
+
+
 class QlinkRecord(TypedDict):
     """One navigation of the §4.4.1 study."""
 
@@ -320,6 +333,8 @@ class QlinkRecord(TypedDict):
     value: float
     """R'/R (sensor-range) or the landmark size in m (occlusion)"""
     schedule: Schedule
+    robot: RobotAblation
+    """the full robot, or one with some errors removed (the ablation rows)"""
     start: int
     goal: int
     plan_len: int
@@ -337,11 +352,15 @@ class QlinkTableRow(TypedDict):
     trial: Literal["sensor-range", "occlusion"]
     value: float
     schedule: Schedule
+    robot: RobotAblation
     pairs: int
     no_path: int
     failures: int
     failure_rate: float
     over_bound: int
+    """successes whose transitions exceed Proposition 2's bound"""
+    over_bound_trajectory: int
+    """successes whose whole trajectory exceeds it (the thesis's Fig 4.7 reading)"""
     mean_length: float
 
 

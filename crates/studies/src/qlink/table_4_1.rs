@@ -28,8 +28,11 @@ use qlink::{
     SearchPomdp, Sensing,
 };
 
+pub mod ablation;
+pub mod claims;
 pub mod report;
 
+pub use ablation::Ablation;
 pub use report::{Output, THESIS_FAILURE_RATES, Table41, thesis_failure_rate};
 
 use crate::error::{Result, StudyError};
@@ -217,6 +220,18 @@ pub struct StudyConfig {
     /// exactly (`robot` unused; runs labelled as such).
     #[serde(default)]
     pub exact_robot: bool,
+    /// The robot's errors removed one at a time ([`Ablation`]), each run at those of
+    /// `ablation_factors` the sensor-range trial runs: the measured causes the report gives where a row differs from the
+    /// thesis's. Ablations that would not change the robot (or any, for the exact robot) are
+    /// not run.
+    #[serde(default)]
+    pub robot_ablations: Vec<Ablation>,
+    /// R'/R of the sensor-range rows the ablations are run at.
+    #[serde(default)]
+    pub ablation_factors: Vec<f64>,
+    /// Pairs per ablation row (`None`: as `pairs`).
+    #[serde(default)]
+    pub ablation_pairs: Option<usize>,
 }
 
 /// The §4.4.1 navigating robot: the mapping robot's detection noise N(0, 0.3).
@@ -243,6 +258,9 @@ pub struct Setting {
     pub schedule: Schedule,
     /// Pairs to navigate (`None`: the config's).
     pub pairs: Option<usize>,
+    /// The errors the navigating robot keeps (the full robot but in the ablation rows).
+    #[serde(default)]
+    pub robot: Ablation,
 }
 
 impl StudyConfig {
@@ -278,6 +296,11 @@ impl StudyConfig {
             schedule_pairs: Some(8000),
             robot: thesis_robot(),
             exact_robot: false,
+            // every sensor-range row, so each row that differs from the thesis's has its
+            // measured robot cause (issue 36 §4); 8,000 pairs as the further schedules
+            robot_ablations: Ablation::MEASURED.to_vec(),
+            ablation_factors: vec![1.0, 0.9, 0.8, 0.7, 0.6],
+            ablation_pairs: Some(8000),
         }
     }
 
@@ -287,6 +310,10 @@ impl StudyConfig {
         Self {
             pairs: Some(400),
             schedule_pairs: Some(400),
+            ablation_pairs: Some(400),
+            // R' = 0.9 R alone: the row furthest from the thesis's (by a factor of 8.6 at
+            // full scale, issue 36)
+            ablation_factors: vec![0.9],
             samples: 100,
             ..Self::full(seed)
         }
@@ -301,7 +328,8 @@ impl StudyConfig {
     /// step or sensing angle.
     pub fn settings(&self) -> Result<Vec<Setting>> {
         let bad = |m: String| Err(StudyError::InvalidParameter(m));
-        if self.pairs == Some(0) || self.schedule_pairs == Some(0) {
+        if self.pairs == Some(0) || self.schedule_pairs == Some(0) || self.ablation_pairs == Some(0)
+        {
             return bad("pairs must be >= 1 (or all)".into());
         }
         if self.samples == 0 || self.samples > 1_000_000 {
@@ -321,6 +349,7 @@ impl StudyConfig {
             .range_factors
             .iter()
             .chain(&self.sizes)
+            .chain(&self.ablation_factors)
             .find(|v| !(v.is_finite() && **v > 0.0 && **v <= MAX_FACTOR))
         {
             return bad(format!(
@@ -347,10 +376,13 @@ impl StudyConfig {
         // The work: one navigation per pair and setting, its cost in proportion to the checks
         // along its path (1/step); pairs left out (all) counted as the quick config's.
         let navigations = |pairs: Option<usize>| pairs.unwrap_or(ALL_PAIRS_ESTIMATE) as f64;
+        let ablations = self.ablations();
         let n_settings = (self.range_factors.len() + self.sizes.len()) as f64
             * navigations(self.pairs)
             + (self.occlusion_schedules.len() * self.sizes.len()) as f64
-                * navigations(self.schedule_pairs.or(self.pairs));
+                * navigations(self.schedule_pairs.or(self.pairs))
+            + (ablations.len() * self.ablation_factors_run().len()) as f64
+                * navigations(self.ablation_pairs.or(self.pairs));
         if let Err(e) = Cost::work(n_settings / self.step, SECONDS_PER_NAVIGATION).check(
             &Budget::RUN,
             format!("{n_settings:.2e} navigations at step = {} m", self.step),
@@ -368,6 +400,7 @@ impl StudyConfig {
             value,
             schedule: self.schedule,
             pairs: self.pairs,
+            robot: Ablation::Full,
         };
         let range = self
             .range_factors
@@ -380,12 +413,23 @@ impl StudyConfig {
                 value,
                 schedule,
                 pairs: self.schedule_pairs.or(self.pairs),
+                robot: Ablation::Full,
+            })
+        });
+        let ablation_factors = self.ablation_factors_run();
+        let ablated = ablations.iter().flat_map(|&robot| {
+            ablation_factors.iter().map(move |&value| Setting {
+                trial: Trial::SensorRange,
+                value,
+                schedule: self.schedule,
+                pairs: self.ablation_pairs.or(self.pairs),
+                robot,
             })
         });
         let v: Vec<Setting> = match self.trial {
-            Trials::SensorRange => range.collect(),
+            Trials::SensorRange => range.chain(ablated).collect(),
             Trials::Occlusion => occ.chain(extra).collect(),
-            Trials::All => range.chain(occ).chain(extra).collect(),
+            Trials::All => range.chain(occ).chain(extra).chain(ablated).collect(),
         };
         if v.is_empty() {
             return bad(format!(
@@ -412,7 +456,7 @@ impl StudyConfig {
         Ok(NavConfig {
             references: self.references,
             arrival: self.arrival,
-            robot: self.navigating_robot(),
+            robot: setting.robot.apply(self.navigating_robot()),
             sensing: setting.schedule.sensing,
             fallbacks: setting.schedule.fallbacks,
             ..nav_config(radius, self.step)?
@@ -423,6 +467,35 @@ impl StudyConfig {
     #[must_use]
     pub fn navigating_robot(&self) -> Robot {
         self.robot.or_exact(self.exact_robot, self.seed)
+    }
+
+    /// The ablations run: those of `robot_ablations` that change the navigating robot, each
+    /// once, in the order given.
+    #[must_use]
+    pub fn ablations(&self) -> Vec<Ablation> {
+        let robot = self.navigating_robot();
+        let mut out: Vec<Ablation> = Vec::new();
+        for &a in &self.robot_ablations {
+            if a.changes(&robot) && !out.contains(&a) {
+                out.push(a);
+            }
+        }
+        out
+    }
+
+    /// The R'/R the ablations run at: those of `ablation_factors` the sensor-range trial runs
+    /// (an ablation row is read against the full robot's row at its setting).
+    #[must_use]
+    pub fn ablation_factors_run(&self) -> Vec<f64> {
+        self.ablation_factors
+            .iter()
+            .copied()
+            .filter(|a| {
+                self.range_factors
+                    .iter()
+                    .any(|r| r.to_bits() == a.to_bits())
+            })
+            .collect()
     }
 
     /// The idealised options this study runs with (empty: the thesis's robot).
@@ -458,6 +531,9 @@ pub struct TrialRecord {
     pub value: f64,
     /// Sensing and fallbacks.
     pub schedule: Schedule,
+    /// The errors the robot kept.
+    #[serde(default)]
+    pub robot: Ablation,
     /// Start landmark.
     pub start: u32,
     /// Goal landmark.
@@ -649,6 +725,7 @@ fn run_pairs<P: Perception>(
                 trial: setting.trial,
                 value: setting.value,
                 schedule: setting.schedule,
+                robot: setting.robot,
                 start: s,
                 goal: g,
                 plan_len: outcome.plan_len,
@@ -699,6 +776,8 @@ pub struct TableRow {
     pub value: f64,
     /// Sensing and fallbacks.
     pub schedule: Schedule,
+    /// The errors the robot kept.
+    pub robot: Ablation,
     /// Pairs navigated.
     pub pairs: usize,
     /// Pairs without a path in the link graph.
@@ -709,15 +788,18 @@ pub struct TableRow {
     pub failure_rate: f64,
     /// Successful runs whose transitions were longer than Proposition 2's bound.
     pub over_bound: usize,
+    /// Successful runs whose whole trajectory was longer than Proposition 2's bound (what
+    /// the thesis's Fig 4.7 sets beside the bound).
+    pub over_bound_trajectory: usize,
     /// Mean trajectory length of the successful runs (m).
     pub mean_length: f64,
 }
 
-/// Table 4.1 from records: one row per (trial, value, schedule), in the records' order.
+/// Table 4.1 from records: one row per (trial, value, schedule, robot), in the records' order.
 #[must_use]
 pub fn table(records: &[TrialRecord]) -> Vec<TableRow> {
-    let key = |r: &TrialRecord| (r.trial, r.value.to_bits(), r.schedule.to_string());
-    let mut keys: Vec<(Trial, u64, String)> = Vec::new();
+    let key = |r: &TrialRecord| (r.trial, r.value.to_bits(), r.schedule.to_string(), r.robot);
+    let mut keys: Vec<(Trial, u64, String, Ablation)> = Vec::new();
     for r in records {
         let k = key(r);
         if !keys.contains(&k) {
@@ -741,6 +823,7 @@ pub fn table(records: &[TrialRecord]) -> Vec<TableRow> {
                 trial: k.0,
                 value: f64::from_bits(k.1),
                 schedule: sel[0].schedule,
+                robot: k.3,
                 pairs: sel.len(),
                 no_path,
                 failures,
@@ -748,6 +831,10 @@ pub fn table(records: &[TrialRecord]) -> Vec<TableRow> {
                 over_bound: successes
                     .iter()
                     .filter(|r| r.transit_length > r.bound + 1e-9)
+                    .count(),
+                over_bound_trajectory: successes
+                    .iter()
+                    .filter(|r| r.length > r.bound + 1e-9)
                     .count(),
                 mean_length: successes.iter().map(|r| r.length).sum::<f64>()
                     / successes.len().max(1) as f64,
@@ -765,6 +852,9 @@ pub struct SettingInfo {
     pub value: f64,
     /// Sensing and fallbacks.
     pub schedule: Schedule,
+    /// The errors the robot kept.
+    #[serde(default)]
+    pub robot: Ablation,
     /// Mapping frames.
     pub frames: usize,
     /// Map elements.
@@ -873,6 +963,7 @@ pub fn run_world(
             trial: setting.trial,
             value: setting.value,
             schedule: setting.schedule,
+            robot: setting.robot,
         };
         out.push((i, records, info));
     }
@@ -978,6 +1069,7 @@ mod tests {
             },
             value: 1.0,
             schedule: Schedule::CONTINUOUS,
+            robot: Ablation::Full,
             start: 0,
             goal: 1,
             plan_len,

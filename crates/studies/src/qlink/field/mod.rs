@@ -48,6 +48,7 @@
 //! recognised that landmark when it was within effective range, instead of one value for
 //! every landmark).
 
+mod claims;
 mod experiment;
 mod mapping;
 mod output;
@@ -56,10 +57,14 @@ mod report;
 mod summary;
 mod trials;
 
+pub use claims::{
+    InVivo, THESIS_ELEMENTS, THESIS_IN_VIVO, THESIS_POINT_LANDMARKS, THESIS_TABLE_4_2,
+    thesis_plan_len,
+};
 pub use experiment::{FieldExperiment, FieldOutput, FieldWorld, VariantRate};
 pub use mapping::{FieldMap, MappingStats, map_field, wall_calculus};
 pub use perception::LidarPerception;
-pub use report::{THESIS_IN_VIVO, THESIS_TABLE_4_2, report};
+pub use report::report;
 pub use summary::{
     BoundRange, BoundSummary, FieldSummary, MapSize, RestrictedPlans, bound_summary, map_size,
     restricted_plans, summarise,

@@ -1,53 +1,14 @@
 //! The field experiment's report: its tables, its claims beside the thesis's in-vivo study
-//! with computed verdicts, and Fig 4.9. The thesis's numbers are [`THESIS_IN_VIVO`] and
-//! [`THESIS_TABLE_4_2`], nowhere else.
+//! ([`super::claims`], which holds the thesis's numbers), and Fig 4.9.
 
 use std::fmt::Write as _;
 
+use super::claims::{THESIS_IN_VIVO, THESIS_TABLE_4_2, claims, ours_by_plan_len};
 use super::output::{FieldOutput, FieldWorld};
-use super::summary::{BoundRange, BoundSummary, FieldSummary};
+use super::summary::{BoundSummary, FieldSummary};
 use super::trials::{FieldResult, FieldTrial};
 use super::{FieldParams, FieldVariant};
-use crate::report::{Cell, Claim, Column, Figure, Plot, Report, SiteRun, Table, Verdict};
-use crate::verdict::{Trend, two_proportion_z, wilson_interval};
-
-/// What the thesis's in-vivo study counted (§4.4.2: 18 trials).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct InVivo {
-    /// Trials run.
-    pub trials: usize,
-    /// Paths completed.
-    pub successes: usize,
-    /// Failures from perceptual aliasing alone.
-    pub perceptual_aliasing: usize,
-    /// Failures from insufficient features alone.
-    pub insufficient_features: usize,
-    /// Failures from both.
-    pub insufficient_features_and_aliasing: usize,
-    /// Successes that re-planned at the link level.
-    pub replanned_successes: usize,
-}
-
-/// The thesis's in-vivo study: 13 of 18 completed, all five failures for insufficient
-/// features (one with aliasing), five successes re-planned.
-pub const THESIS_IN_VIVO: InVivo = InVivo {
-    trials: 18,
-    successes: 13,
-    perceptual_aliasing: 0,
-    insufficient_features: 4,
-    insufficient_features_and_aliasing: 1,
-    replanned_successes: 5,
-};
-
-/// Thesis Table 4.2: (|P|, paths, mean trajectory length m).
-pub const THESIS_TABLE_4_2: [(usize, usize, f64); 6] = [
-    (1, 2, 2.5),
-    (2, 3, 6.5),
-    (3, 2, 12.7),
-    (4, 3, 14.3),
-    (6, 2, 32.9),
-    (8, 1, 38.4),
-];
+use crate::report::{Cell, Column, Figure, Plot, Report, SiteRun, Table};
 
 /// Runs drawn per variant in Fig 4.9 (more hide each other).
 const FIGURE_RUNS: usize = 40;
@@ -233,13 +194,6 @@ fn pooled_table(output: &FieldOutput) -> Table {
 }
 
 /// The thesis variant's (|P|, paths, mean length), pooled.
-fn ours_by_plan_len(output: &FieldOutput) -> Vec<(usize, usize, f64)> {
-    output
-        .pooled(FieldVariant::Thesis)
-        .map(|x| x.by_plan_len.clone())
-        .unwrap_or_default()
-}
-
 fn table_4_2_beside_thesis(output: &FieldOutput) -> Table {
     let ours = ours_by_plan_len(output);
     let mut t = Table::new(
@@ -254,8 +208,9 @@ fn table_4_2_beside_thesis(output: &FieldOutput) -> Table {
         ],
     )
     .caption(
-        "|P| counts transitions of the first plan here (the thesis's |P| counts elements; its \
-         |P| = 1 paths of 2.5 m are runs that started next to the goal element).",
+        "|P| in the thesis's count: the map elements of the first plan (ours counts the \
+         transitions between them, + 1 here; the thesis's |P| = 1 paths of 2.5 m are runs \
+         that started in the goal element, which our draws redraw).",
     );
     let mut keys: Vec<usize> = THESIS_TABLE_4_2
         .iter()
@@ -519,188 +474,6 @@ fn trial_row(w: &FieldWorld, t: &FieldTrial) -> Vec<Cell> {
     row
 }
 
-/// Attempts (trials with a path) and successes of a pooled summary.
-fn attempts(s: &FieldSummary) -> (usize, usize) {
-    (s.successes, s.trials - s.no_path)
-}
-
-fn claims(output: &FieldOutput) -> Vec<Claim> {
-    let mut claims = Vec::new();
-    let th = THESIS_IN_VIVO;
-    let Some(ours) = output.pooled(FieldVariant::Thesis) else {
-        return claims;
-    };
-    let (k, n) = attempts(ours);
-    let [lo, hi] = wilson_interval(th.successes, th.trials, 1.96);
-    claims.push(Claim {
-        what: "success rate (thesis set-up, all worlds pooled)".into(),
-        thesis: format!(
-            "{} of {} ({:.0} %; 95 % interval {:.0}–{:.0} %)",
-            th.successes,
-            th.trials,
-            100.0 * th.successes as f64 / th.trials as f64,
-            100.0 * lo,
-            100.0 * hi
-        ),
-        ours: format!("{k} of {n} ({:.1} %)", 100.0 * ours.success_rate),
-        verdict: Verdict::agree_if(n > 0 && (lo..=hi).contains(&ours.success_rate)),
-        why: "agree when ours lies in the Wilson 95 % interval of the thesis's 18 trials".into(),
-    });
-    let insufficient = ours.insufficient_features + ours.insufficient_features_and_aliasing;
-    claims.push(Claim {
-        what: "most failures are for insufficient features, not perceptual aliasing".into(),
-        thesis: format!(
-            "{} of {} failures for insufficient features ({} with aliasing), {} aliasing alone",
-            th.insufficient_features + th.insufficient_features_and_aliasing,
-            th.trials - th.successes,
-            th.insufficient_features_and_aliasing,
-            th.perceptual_aliasing
-        ),
-        ours: format!(
-            "{insufficient} of {} failures for insufficient features ({} with aliasing), {} \
-             aliasing alone",
-            n - k,
-            ours.insufficient_features_and_aliasing,
-            ours.perceptual_aliasing
-        ),
-        verdict: Verdict::agree_if(insufficient > ours.perceptual_aliasing),
-        why: String::new(),
-    });
-    claims.push(table_4_2_claim(&ours_by_plan_len(output)));
-    claims.extend(bound_claims(&output.bounds));
-    claims.extend(improvement_claims(output, ours));
-    claims
-}
-
-fn table_4_2_claim(ours: &[(usize, usize, f64)]) -> Claim {
-    let theirs: Vec<f64> = THESIS_TABLE_4_2.iter().map(|r| r.2).collect();
-    let means: Vec<f64> = ours.iter().map(|r| r.2).collect();
-    let (t_theirs, t_ours) = (Trend::of(&theirs, 0.0), Trend::of(&means, 0.0));
-    let series = |rows: &mut dyn Iterator<Item = (usize, f64)>| {
-        rows.map(|(k, l)| format!("{k}: {l:.1}"))
-            .collect::<Vec<_>>()
-            .join(", ")
-    };
-    let ours_series = series(&mut ours.iter().map(|r| (r.0, r.2)));
-    // one |P| (or none) has no direction: it is not "flat", it is too little to judge
-    let judged = means.len() >= 2;
-    Claim {
-        what: "Table 4.2: mean trajectory length grows with |P|".into(),
-        thesis: format!(
-            "{} ({})",
-            t_theirs.phrase(),
-            series(&mut THESIS_TABLE_4_2.iter().map(|r| (r.0, r.2)))
-        ),
-        ours: if judged {
-            format!("{} ({ours_series})", t_ours.phrase())
-        } else {
-            format!("successes at {} |P| value(s) ({ours_series})", means.len())
-        },
-        verdict: Verdict::agree_if(judged && t_ours == t_theirs),
-        why: if !judged {
-            "fewer than two |P| values among the successes: no trend to compare".into()
-        } else if t_ours == t_theirs {
-            String::new()
-        } else {
-            "few paths per |P| (see table_4_2.csv)".into()
-        },
-    }
-}
-
-fn bound_claims(bounds: &[BoundSummary]) -> Vec<Claim> {
-    let mut claims = Vec::new();
-    if let Some(b) = bounds
-        .iter()
-        .find(|b| b.variant == FieldVariant::Thesis && b.range == BoundRange::Lidar)
-    {
-        for (p, exceeded, applies) in [
-            (2, b.exceeded()[0], b.prop2_applies),
-            (4, b.exceeded()[1], b.prop4_applies),
-        ] {
-            claims.push(Claim {
-                what: format!("no path exceeds Proposition {p}'s bound (R = lidar range)"),
-                thesis: "none of the in-vivo paths does".into(),
-                ours: format!(
-                    "{exceeded} of {} successes exceed it; its assumptions hold for {applies}",
-                    b.runs
-                ),
-                verdict: Verdict::agree_if(exceeded == 0),
-                why: if exceeded == 0 {
-                    String::new()
-                } else {
-                    "the runs are outside the guarantee, whose assumptions fail here (see the \
-                     bounds table)"
-                        .into()
-                },
-            });
-        }
-    }
-    let contradictions: usize = bounds.iter().map(|b| b.contradictions).sum();
-    let applied: usize = bounds
-        .iter()
-        .map(|b| b.prop2_applies + b.prop4_applies)
-        .sum();
-    claims.push(Claim {
-        what: "Propositions 2 and 4: a run whose assumptions hold stays within the bound".into(),
-        thesis: "proved".into(),
-        ours: format!(
-            "{contradictions} runs exceed a bound whose assumptions hold ({applied} run-bounds \
-             applied, every variant, both R)"
-        ),
-        verdict: Verdict::holds_if(contradictions == 0),
-        why: String::new(),
-    });
-    claims
-}
-
-fn improvement_claims(output: &FieldOutput, base: &FieldSummary) -> Vec<Claim> {
-    let (k0, n0) = attempts(base);
-    let mut claims = Vec::new();
-    for (variant, thesis) in [
-        (
-            FieldVariant::SafeSearch,
-            "a safe-search controller \"will increase the chance of success, but at the expense \
-             of trajectory length\" (proposed, not measured)",
-        ),
-        (
-            FieldVariant::VisibilityCosts,
-            "modelling where observations are less likely steers plans away from them \
-             (proposed, not measured)",
-        ),
-    ] {
-        let Some(s) = output.pooled(variant) else {
-            continue;
-        };
-        let (k1, n1) = attempts(s);
-        let z = two_proportion_z(k1, n1, k0, n0);
-        let better = z > 1.96;
-        let longer = s.mean_length > base.mean_length;
-        let ours = format!(
-            "{:.1} % against {:.1} % (z = {z:.2}); mean length {:.1} m against {:.1} m",
-            100.0 * s.success_rate,
-            100.0 * base.success_rate,
-            s.mean_length,
-            base.mean_length
-        );
-        let agree = match variant {
-            FieldVariant::SafeSearch => better && longer,
-            _ => better,
-        };
-        claims.push(Claim {
-            what: format!("{} raises the success rate", variant.name()),
-            thesis: thesis.into(),
-            ours,
-            verdict: Verdict::agree_if(agree),
-            why: if better {
-                String::new()
-            } else {
-                "not higher by more than the two rates' noise (z ≤ 1.96)".into()
-            },
-        });
-    }
-    claims
-}
-
 fn figures(output: &FieldOutput) -> Vec<Figure> {
     let Some(world) = output.worlds.first() else {
         return Vec::new();
@@ -764,78 +537,3 @@ const DIFFERENCES: &str = "## Where we differ and why\n\n\
   method; compare the means and their spread.\n\
 - The walls are recognised as *which* wall by appearance (given), and their frame comes from \
   their true end points; only their detection is from the lidar.\n";
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    fn summary(v: FieldVariant, trials: usize, successes: usize, length: f64) -> FieldSummary {
-        FieldSummary {
-            variant: v,
-            trials,
-            no_path: 0,
-            successes,
-            success_rate: successes as f64 / trials as f64,
-            perceptual_aliasing: 0,
-            insufficient_features: trials - successes,
-            insufficient_features_and_aliasing: 0,
-            mean_length: length,
-            replanned_successes: 0,
-            by_plan_len: vec![(1, 1, 5.0), (2, 1, 4.0)],
-        }
-    }
-
-    fn output(variants: Vec<FieldSummary>) -> FieldOutput {
-        FieldOutput {
-            worlds: Vec::new(),
-            variants,
-            success_rate_over_worlds: Vec::new(),
-            bounds: Vec::new(),
-        }
-    }
-
-    #[test]
-    fn an_improvement_within_noise_is_not_called_an_improvement() {
-        let o = output(vec![
-            summary(FieldVariant::Thesis, 12, 8, 50.0),
-            summary(FieldVariant::SafeSearch, 12, 9, 60.0),
-            summary(FieldVariant::VisibilityCosts, 200, 190, 40.0),
-        ]);
-        let base = &o.variants[0];
-        let c = improvement_claims(&o, base);
-        assert_eq!(c[0].verdict, Verdict::Disagree, "{:?}", c[0]);
-        assert!(c[0].why.contains("noise"));
-        // 190 of 200 against 8 of 12 is beyond noise
-        assert_eq!(c[1].verdict, Verdict::Agree, "{:?}", c[1]);
-    }
-
-    #[test]
-    fn a_falling_table_4_2_is_not_called_growing() {
-        // the old test was `>=` between neighbours: a flat or falling series "agreed"
-        let c = table_4_2_claim(&[(1, 1, 5.0), (2, 1, 4.0)]);
-        assert_eq!(c.verdict, Verdict::Disagree);
-        assert!(c.ours.starts_with("falls"), "{}", c.ours);
-        let c = table_4_2_claim(&[(1, 2, 3.0), (2, 1, 3.0)]);
-        assert_eq!(c.verdict, Verdict::Disagree, "flat is not growth");
-        let c = table_4_2_claim(&[(1, 2, 3.0), (3, 1, 9.0)]);
-        assert_eq!(c.verdict, Verdict::Agree);
-        // one |P| is not a flat series: too little to judge, and said so
-        let c = table_4_2_claim(&[(1, 9, 63.4)]);
-        assert_eq!(c.verdict, Verdict::Disagree);
-        assert!(c.why.contains("fewer than two"), "{}", c.why);
-        assert!(!c.ours.contains("flat"), "{}", c.ours);
-    }
-
-    #[test]
-    fn the_success_rate_agrees_within_the_thesis_interval_only() {
-        let claim = |k: usize| {
-            claims(&output(vec![summary(FieldVariant::Thesis, 100, k, 1.0)]))
-                .into_iter()
-                .next()
-                .map(|c| c.verdict)
-        };
-        assert_eq!(claim(80), Some(Verdict::Agree));
-        assert_eq!(claim(95), Some(Verdict::Disagree));
-        assert_eq!(claim(40), Some(Verdict::Disagree));
-    }
-}

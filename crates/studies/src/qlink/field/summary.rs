@@ -209,6 +209,10 @@ pub struct MapSize {
     /// Point-triplet map elements (distinct landmark sets co-observed in `min_observations`
     /// scans: what the thesis counts as its 44).
     pub point_elements: usize,
+    /// Every element of the map, point and wall layers (what the thesis's "44 distinct QRM
+    /// map elements" counts).
+    #[serde(default)]
+    pub elements: usize,
     /// Links of the link graph (directed edges, β of the params).
     pub links: usize,
     /// Mean number of elements a landmark belongs to.
@@ -250,6 +254,7 @@ pub fn map_size(field: &FieldMap, params: &FieldParams) -> Result<MapSize> {
         possible_triplets: n * n.saturating_sub(1) * n.saturating_sub(2) / 6,
         recorded_triplets: field.stats.point_elements,
         point_elements,
+        elements: field.map.elements().len(),
         links: graph.n_edges(),
         elements_per_landmark: per as f64 / n.max(1) as f64,
     })

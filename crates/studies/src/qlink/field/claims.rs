@@ -1,0 +1,656 @@
+//! The claims of the field experiment (thesis §4.4.2) judged on a run: the in-vivo study's
+//! success rate, failure causes and re-planning share, Table 4.2 by trend and by magnitude,
+//! the map's size, Propositions 2 and 4, and the proposed improvements. The thesis's numbers
+//! are the constants here, nowhere else.
+
+use super::FieldVariant;
+use super::output::{FieldOutput, FieldWorld};
+use super::summary::{BoundRange, FieldSummary};
+use super::trials::{FieldResult, FieldTrial};
+use crate::report::{Claim, Verdict};
+use crate::verdict::{Trend, two_proportion_z, wilson_interval};
+
+/// What the thesis's in-vivo study counted (§4.4.2: 18 trials).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct InVivo {
+    /// Trials run.
+    pub trials: usize,
+    /// Paths completed.
+    pub successes: usize,
+    /// Failures from perceptual aliasing alone.
+    pub perceptual_aliasing: usize,
+    /// Failures from insufficient features alone.
+    pub insufficient_features: usize,
+    /// Failures from both.
+    pub insufficient_features_and_aliasing: usize,
+    /// Successes that re-planned at the link level.
+    pub replanned_successes: usize,
+}
+
+/// The thesis's in-vivo study: 13 of 18 completed, all five failures for insufficient
+/// features (one with aliasing), five successes re-planned.
+pub const THESIS_IN_VIVO: InVivo = InVivo {
+    trials: 18,
+    successes: 13,
+    perceptual_aliasing: 0,
+    insufficient_features: 4,
+    insufficient_features_and_aliasing: 1,
+    replanned_successes: 5,
+};
+
+/// Thesis Table 4.2: (|P|, paths, mean trajectory length m). Its |P| counts map elements:
+/// ours, which counts transitions, + 1 ([`thesis_plan_len`]).
+pub const THESIS_TABLE_4_2: [(usize, usize, f64); 6] = [
+    (1, 2, 2.5),
+    (2, 3, 6.5),
+    (3, 2, 12.7),
+    (4, 3, 14.3),
+    (6, 2, 32.9),
+    (8, 1, 38.4),
+];
+
+/// The thesis's field map: "44 distinct QRM map elements".
+pub const THESIS_ELEMENTS: usize = 44;
+
+/// The thesis's field map's point landmarks ("25 point landmarks and 2 walls").
+pub const THESIS_POINT_LANDMARKS: usize = 25;
+
+/// Table 4.2's |P| above which "the path length dramatically increases".
+pub const THESIS_RISE_ABOVE: usize = 5;
+
+/// A plan of ours in the thesis's count: it counts the map elements of a path (its |P| = 1 is
+/// "goal visible from the start"), we count the transitions between them.
+#[must_use]
+pub fn thesis_plan_len(transitions: usize) -> usize {
+    transitions + 1
+}
+
+/// Attempts (trials with a path) and successes of a pooled summary.
+fn attempts(s: &FieldSummary) -> (usize, usize) {
+    (s.successes, s.trials - s.no_path)
+}
+
+/// Every claim of a run.
+pub(super) fn claims(output: &FieldOutput) -> Vec<Claim> {
+    let mut claims = Vec::new();
+    let th = THESIS_IN_VIVO;
+    let Some(ours) = output.pooled(FieldVariant::Thesis) else {
+        return claims;
+    };
+    let (k, n) = attempts(ours);
+    let [lo, hi] = wilson_interval(th.successes, th.trials, 1.96);
+    claims.push(Claim {
+        what: "success rate (thesis set-up, all worlds pooled)".into(),
+        thesis: format!(
+            "{} of {} ({:.0} %; 95 % interval {:.0}–{:.0} %)",
+            th.successes,
+            th.trials,
+            100.0 * th.successes as f64 / th.trials as f64,
+            100.0 * lo,
+            100.0 * hi
+        ),
+        ours: format!("{k} of {n} ({:.1} %)", 100.0 * ours.success_rate),
+        verdict: Verdict::agree_if(n > 0 && (lo..=hi).contains(&ours.success_rate)),
+        why: "agree when ours lies in the Wilson 95 % interval of the thesis's 18 trials".into(),
+    });
+    let insufficient = ours.insufficient_features + ours.insufficient_features_and_aliasing;
+    claims.push(Claim {
+        what: "most failures are for insufficient features, not perceptual aliasing".into(),
+        thesis: format!(
+            "{} of {} failures for insufficient features ({} with aliasing), {} aliasing alone",
+            th.insufficient_features + th.insufficient_features_and_aliasing,
+            th.trials - th.successes,
+            th.insufficient_features_and_aliasing,
+            th.perceptual_aliasing
+        ),
+        ours: format!(
+            "{insufficient} of {} failures for insufficient features ({} with aliasing), {} \
+             aliasing alone",
+            n - k,
+            ours.insufficient_features_and_aliasing,
+            ours.perceptual_aliasing
+        ),
+        verdict: Verdict::agree_if(insufficient > ours.perceptual_aliasing),
+        why: String::new(),
+    });
+    claims.push(replanning_claim(ours));
+    claims.push(table_4_2_claim(&ours_by_plan_len(output)));
+    claims.push(table_4_2_magnitude_claim(output));
+    claims.push(rise_claim(&ours_by_plan_len(output)));
+    claims.extend(map_size_claims(output));
+    claims.extend(bound_claims(output));
+    claims.extend(improvement_claims(output, ours));
+    claims
+}
+
+/// Table 4.2's trend: the mean trajectory per |P| (thesis count) rises.
+fn table_4_2_claim(ours: &[(usize, usize, f64)]) -> Claim {
+    let theirs: Vec<f64> = THESIS_TABLE_4_2.iter().map(|r| r.2).collect();
+    let means: Vec<f64> = ours.iter().map(|r| r.2).collect();
+    let (t_theirs, t_ours) = (Trend::of(&theirs, 0.0), Trend::of(&means, 0.0));
+    let series = |rows: &mut dyn Iterator<Item = (usize, f64)>| {
+        rows.map(|(k, l)| format!("{k}: {l:.1}"))
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
+    let ours_series = series(&mut ours.iter().map(|r| (r.0, r.2)));
+    // one |P| (or none) has no direction: it is not "flat", it is too little to judge
+    let judged = means.len() >= 2;
+    Claim {
+        what: "Table 4.2: mean trajectory length grows with |P|".into(),
+        thesis: format!(
+            "{} ({})",
+            t_theirs.phrase(),
+            series(&mut THESIS_TABLE_4_2.iter().map(|r| (r.0, r.2)))
+        ),
+        ours: if judged {
+            format!("{} ({ours_series})", t_ours.phrase())
+        } else {
+            format!("successes at {} |P| value(s) ({ours_series})", means.len())
+        },
+        verdict: Verdict::agree_if(judged && t_ours == t_theirs),
+        why: if !judged {
+            "fewer than two |P| values among the successes: no trend to compare".into()
+        } else if t_ours == t_theirs {
+            String::new()
+        } else {
+            "few paths per |P| (see table_4_2.csv)".into()
+        },
+    }
+}
+
+/// "None of the paths exceed either distance bound provided by Propositions 2 or 4", read
+/// on the lengths the thesis reports (whole trajectories, Table 4.2), with the length driven
+/// in transitions (what the proofs sum) beside them.
+fn bound_claims(output: &FieldOutput) -> Vec<Claim> {
+    let bounds = &output.bounds;
+    let mut claims = Vec::new();
+    if let Some(b) = bounds
+        .iter()
+        .find(|b| b.variant == FieldVariant::Thesis && b.range == BoundRange::Lidar)
+    {
+        let successes: Vec<&FieldTrial> = output
+            .trials()
+            .map(|(_, t)| t)
+            .filter(|t| t.variant == FieldVariant::Thesis && t.result == FieldResult::Success)
+            .collect();
+        for (p, exceeded, applies) in [
+            (2, b.exceeded()[0], b.prop2_applies),
+            (4, b.exceeded()[1], b.prop4_applies),
+        ] {
+            let over = successes
+                .iter()
+                .filter(|t| {
+                    let c = &t.bounds[0];
+                    t.length > if p == 2 { c.prop2 } else { c.prop4 } + 1e-9
+                })
+                .count();
+            claims.push(Claim {
+                what: format!("no path exceeds Proposition {p}'s bound (R = lidar range)"),
+                thesis: "none of the in-vivo paths does".into(),
+                ours: format!(
+                    "{over} of {} successful trajectories exceed it ({exceeded} by the length \
+                     driven in transitions alone); its assumptions hold for {applies}",
+                    successes.len()
+                ),
+                verdict: Verdict::agree_if(over == 0),
+                why: if over == 0 {
+                    String::new()
+                } else {
+                    "the runs are outside the guarantee, whose assumptions fail here (see the \
+                     bounds table); a trajectory also holds the localisation before the first \
+                     transition and the search for the goal after the last"
+                        .into()
+                },
+            });
+        }
+    }
+    let contradictions: usize = bounds.iter().map(|b| b.contradictions).sum();
+    let applied: usize = bounds
+        .iter()
+        .map(|b| b.prop2_applies + b.prop4_applies)
+        .sum();
+    claims.push(Claim {
+        what: "Propositions 2 and 4: a run whose assumptions hold stays within the bound".into(),
+        thesis: "proved".into(),
+        ours: format!(
+            "{contradictions} runs exceed a bound whose assumptions hold ({applied} run-bounds \
+             applied, every variant, both R)"
+        ),
+        verdict: Verdict::holds_if(contradictions == 0),
+        why: String::new(),
+    });
+    claims
+}
+
+fn improvement_claims(output: &FieldOutput, base: &FieldSummary) -> Vec<Claim> {
+    let (k0, n0) = attempts(base);
+    let mut claims = Vec::new();
+    for (variant, thesis) in [
+        (
+            FieldVariant::SafeSearch,
+            "a safe-search controller \"will increase the chance of success, but at the expense \
+             of trajectory length\" (proposed, not measured)",
+        ),
+        (
+            FieldVariant::VisibilityCosts,
+            "modelling where observations are less likely steers plans away from them \
+             (proposed, not measured)",
+        ),
+    ] {
+        let Some(s) = output.pooled(variant) else {
+            continue;
+        };
+        let (k1, n1) = attempts(s);
+        let z = two_proportion_z(k1, n1, k0, n0);
+        let better = z > 1.96;
+        let longer = s.mean_length > base.mean_length;
+        let ours = format!(
+            "{:.1} % against {:.1} % (z = {z:.2}); mean length {:.1} m against {:.1} m",
+            100.0 * s.success_rate,
+            100.0 * base.success_rate,
+            s.mean_length,
+            base.mean_length
+        );
+        let agree = match variant {
+            FieldVariant::SafeSearch => better && longer,
+            _ => better,
+        };
+        claims.push(Claim {
+            what: format!("{} raises the success rate", variant.name()),
+            thesis: thesis.into(),
+            ours,
+            verdict: Verdict::agree_if(agree),
+            why: if better {
+                String::new()
+            } else {
+                "not higher by more than the two rates' noise (z ≤ 1.96)".into()
+            },
+        });
+    }
+    claims
+}
+
+/// Table 4.2 of the thesis variant, pooled over the worlds, keyed by the thesis's |P| count:
+/// `(|P|, paths, mean length m)`.
+pub(super) fn ours_by_plan_len(output: &FieldOutput) -> Vec<(usize, usize, f64)> {
+    output
+        .pooled(FieldVariant::Thesis)
+        .map(|x| {
+            x.by_plan_len
+                .iter()
+                .map(|&(k, n, l)| (thesis_plan_len(k), n, l))
+                .collect()
+        })
+        .unwrap_or_default()
+}
+
+/// "In five of the successful trajectories, the robot … re-plans at the link level": ours
+/// within the Wilson 95 % interval of the thesis's 5 of 13.
+fn replanning_claim(ours: &FieldSummary) -> Claim {
+    let th = THESIS_IN_VIVO;
+    let [lo, hi] = wilson_interval(th.replanned_successes, th.successes, 1.96);
+    let share = ours.replanned_successes as f64 / ours.successes.max(1) as f64;
+    Claim {
+        what: "successes that re-planned at the link level (thesis set-up)".into(),
+        thesis: format!(
+            "{} of {} ({:.0} %; 95 % interval {:.0}–{:.0} %)",
+            th.replanned_successes,
+            th.successes,
+            100.0 * th.replanned_successes as f64 / th.successes as f64,
+            100.0 * lo,
+            100.0 * hi
+        ),
+        ours: format!(
+            "{} of {} ({:.1} %)",
+            ours.replanned_successes,
+            ours.successes,
+            100.0 * share
+        ),
+        verdict: Verdict::agree_if(ours.successes > 0 && (lo..=hi).contains(&share)),
+        why: String::new(),
+    }
+}
+
+/// Mean and sample standard deviation of `v` (`None` below two values).
+fn mean_sd(v: &[f64]) -> Option<(f64, f64)> {
+    if v.len() < 2 {
+        return None;
+    }
+    let n = v.len() as f64;
+    let mean = v.iter().sum::<f64>() / n;
+    let var = v.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1.0);
+    Some((mean, var.sqrt()))
+}
+
+/// Table 4.2 by magnitude: could each of the thesis's rows be the mean of its few paths drawn
+/// from our trajectories at the same |P|? A row agrees when the thesis's mean lies within
+/// 1.96 standard errors (our spread at that |P| over √(its paths)) of our mean.
+fn table_4_2_magnitude_claim(output: &FieldOutput) -> Claim {
+    let successes: Vec<(usize, f64, f64)> = output
+        .trials()
+        .map(|(_, t)| t)
+        .filter(|t| t.variant == FieldVariant::Thesis && t.result == FieldResult::Success)
+        .map(|t| (t.plan_len, t.length, t.transit_length))
+        .collect();
+    table_4_2_magnitude(&successes)
+}
+
+/// [`table_4_2_magnitude_claim`] on successes `(|P| in transitions, trajectory length m,
+/// length driven in transitions m)`. Where rows differ, the why is measured on the same
+/// successes: metres per transition against the thesis's metres per element, and the share
+/// of the trajectory driven outside transitions.
+fn table_4_2_magnitude(successes: &[(usize, f64, f64)]) -> Claim {
+    let mut within = 0;
+    let mut rows = Vec::new();
+    for &(k, n, mean_t) in &THESIS_TABLE_4_2 {
+        let lengths: Vec<f64> = successes
+            .iter()
+            .filter(|t| thesis_plan_len(t.0) == k)
+            .map(|t| t.1)
+            .collect();
+        match mean_sd(&lengths) {
+            Some((m, sd)) => {
+                let half = 1.96 * sd / (n as f64).sqrt();
+                let ok = (mean_t - m).abs() <= half;
+                within += usize::from(ok);
+                rows.push(format!(
+                    "{k}: {m:.1} ± {half:.1} m ({} paths){}",
+                    lengths.len(),
+                    if ok { "" } else { " ✗" }
+                ));
+            }
+            None => rows.push(format!("{k}: {} path(s) ✗", lengths.len())),
+        }
+    }
+    Claim {
+        what: "Table 4.2 by magnitude: each row's mean trajectory within our spread at its |P|"
+            .into(),
+        thesis: THESIS_TABLE_4_2
+            .iter()
+            .map(|r| {
+                format!(
+                    "{}: {:.1} m ({} path{})",
+                    r.0,
+                    r.2,
+                    r.1,
+                    if r.1 == 1 { "" } else { "s" }
+                )
+            })
+            .collect::<Vec<_>>()
+            .join(", "),
+        ours: format!(
+            "{within} of {} rows within ({})",
+            THESIS_TABLE_4_2.len(),
+            rows.join(", ")
+        ),
+        verdict: Verdict::agree_if(within == THESIS_TABLE_4_2.len()),
+        why: if within == THESIS_TABLE_4_2.len() {
+            String::new()
+        } else {
+            per_element_why(successes)
+        },
+    }
+}
+
+/// Metres per transition of ours against metres per element of the thesis's Table 4.2, and
+/// the share of our trajectories outside transitions (localising first, finding the goal
+/// last): the measured reason Table 4.2's magnitudes differ.
+fn per_element_why(successes: &[(usize, f64, f64)]) -> String {
+    let theirs: f64 = THESIS_TABLE_4_2
+        .iter()
+        .map(|r| r.1 as f64 * r.2)
+        .sum::<f64>()
+        / THESIS_TABLE_4_2
+            .iter()
+            .map(|r| (r.1 * r.0) as f64)
+            .sum::<f64>();
+    let transitions: usize = successes.iter().map(|t| t.0).sum();
+    let transit: f64 = successes.iter().map(|t| t.2).sum();
+    let total: f64 = successes.iter().map(|t| t.1).sum();
+    if transitions == 0 || total <= 0.0 {
+        return format!("no successful transitions of ours (thesis: {theirs:.1} m per element)");
+    }
+    format!(
+        "measured on our {} successes: {:.1} m driven per transition against the thesis's \
+         {theirs:.1} m per element of a path, and {:.0} % of our trajectories driven outside \
+         transitions (localising at the start, finding the goal at the end)",
+        successes.len(),
+        transit / transitions as f64,
+        100.0 * (1.0 - transit / total)
+    )
+}
+
+/// The largest rise between successive |P| of `rows` (`(|P|, paths, mean)`, sorted by |P|):
+/// `(from, to, rise m)`.
+fn largest_rise(rows: &[(usize, usize, f64)]) -> Option<(usize, usize, f64)> {
+    rows.windows(2)
+        .map(|w| (w[0].0, w[1].0, w[1].2 - w[0].2))
+        .max_by(|a, b| a.2.total_cmp(&b.2))
+}
+
+/// "The path length dramatically increases for |P| > 5": the largest rise between successive
+/// |P| of Table 4.2 is the one across |P| = 5.
+fn rise_claim(ours: &[(usize, usize, f64)]) -> Claim {
+    let across = |r: (usize, usize, f64)| r.0 <= THESIS_RISE_ABOVE && r.1 > THESIS_RISE_ABOVE;
+    let phrase = |r: Option<(usize, usize, f64)>| {
+        r.map_or("no two |P| values".to_owned(), |(a, b, d)| {
+            format!("steepest step from |P| = {a} to {b} ({d:+.1} m)")
+        })
+    };
+    let theirs = largest_rise(&THESIS_TABLE_4_2);
+    let mine = largest_rise(ours);
+    Claim {
+        what: format!(
+            "Table 4.2: trajectories lengthen most across |P| = {THESIS_RISE_ABOVE} (thesis count)"
+        ),
+        thesis: phrase(theirs),
+        ours: phrase(mine),
+        verdict: Verdict::agree_if(mine.is_some_and(across)),
+        why: String::new(),
+    }
+}
+
+/// `(min, max)` of `f` over the worlds.
+fn world_range(output: &FieldOutput, f: impl Fn(&FieldWorld) -> usize) -> Option<(usize, usize)> {
+    let v: Vec<usize> = output.worlds.iter().map(f).collect();
+    Some((*v.iter().min()?, *v.iter().max()?))
+}
+
+/// The thesis's map: 44 elements over 25 point landmarks and 2 walls. Ours agree when the
+/// thesis's count lies within our worlds' range; the false landmarks are given beside.
+fn map_size_claims(output: &FieldOutput) -> Vec<Claim> {
+    let (Some(elements), Some(ids)) = (
+        world_range(output, |w| w.map_size.elements),
+        world_range(output, |w| w.mapping.mapped_ids),
+    ) else {
+        return Vec::new();
+    };
+    let false_ids = world_range(output, |w| w.mapping.false_landmarks).unwrap_or((0, 0));
+    let n = output.worlds.len();
+    let per: f64 = output
+        .worlds
+        .iter()
+        .map(|w| w.map_size.elements_per_landmark)
+        .sum::<f64>()
+        / n.max(1) as f64;
+    let span = |(lo, hi): (usize, usize)| {
+        if lo == hi {
+            lo.to_string()
+        } else {
+            format!("{lo}–{hi}")
+        }
+    };
+    vec![
+        Claim {
+            what: "the field map's elements".into(),
+            thesis: format!("{THESIS_ELEMENTS}"),
+            ours: format!("{} over {n} world(s)", span(elements)),
+            verdict: Verdict::agree_if((elements.0..=elements.1).contains(&THESIS_ELEMENTS)),
+            why: if (elements.0..=elements.1).contains(&THESIS_ELEMENTS) {
+                String::new()
+            } else {
+                format!(
+                    "our maps keep every triplet seen together in enough scans, so the count \
+                     grows with the cube of the landmarks seen at once: {per:.0} elements per \
+                     landmark on average (see the map's size)"
+                )
+            },
+        },
+        Claim {
+            what: "the field map's point landmarks".into(),
+            thesis: format!("{THESIS_POINT_LANDMARKS} (and 2 walls)"),
+            ours: format!(
+                "{} ids over {n} world(s), of them {} false (ground returns)",
+                span(ids),
+                span(false_ids)
+            ),
+            verdict: Verdict::agree_if((ids.0..=ids.1).contains(&THESIS_POINT_LANDMARKS)),
+            why: String::new(),
+        },
+    ]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn summary(v: FieldVariant, trials: usize, successes: usize, length: f64) -> FieldSummary {
+        FieldSummary {
+            variant: v,
+            trials,
+            no_path: 0,
+            successes,
+            success_rate: successes as f64 / trials as f64,
+            perceptual_aliasing: 0,
+            insufficient_features: trials - successes,
+            insufficient_features_and_aliasing: 0,
+            mean_length: length,
+            replanned_successes: 0,
+            by_plan_len: vec![(1, 1, 5.0), (2, 1, 4.0)],
+        }
+    }
+
+    fn output(variants: Vec<FieldSummary>) -> FieldOutput {
+        FieldOutput {
+            worlds: Vec::new(),
+            variants,
+            success_rate_over_worlds: Vec::new(),
+            bounds: Vec::new(),
+        }
+    }
+
+    #[test]
+    fn an_improvement_within_noise_is_not_called_an_improvement() {
+        let o = output(vec![
+            summary(FieldVariant::Thesis, 12, 8, 50.0),
+            summary(FieldVariant::SafeSearch, 12, 9, 60.0),
+            summary(FieldVariant::VisibilityCosts, 200, 190, 40.0),
+        ]);
+        let base = &o.variants[0];
+        let c = improvement_claims(&o, base);
+        assert_eq!(c[0].verdict, Verdict::Disagree, "{:?}", c[0]);
+        assert!(c[0].why.contains("noise"));
+        // 190 of 200 against 8 of 12 is beyond noise
+        assert_eq!(c[1].verdict, Verdict::Agree, "{:?}", c[1]);
+    }
+
+    #[test]
+    fn a_falling_table_4_2_is_not_called_growing() {
+        // the old test was `>=` between neighbours: a flat or falling series "agreed"
+        let c = table_4_2_claim(&[(1, 1, 5.0), (2, 1, 4.0)]);
+        assert_eq!(c.verdict, Verdict::Disagree);
+        assert!(c.ours.starts_with("falls"), "{}", c.ours);
+        let c = table_4_2_claim(&[(1, 2, 3.0), (2, 1, 3.0)]);
+        assert_eq!(c.verdict, Verdict::Disagree, "flat is not growth");
+        let c = table_4_2_claim(&[(1, 2, 3.0), (3, 1, 9.0)]);
+        assert_eq!(c.verdict, Verdict::Agree);
+        // one |P| is not a flat series: too little to judge, and said so
+        let c = table_4_2_claim(&[(1, 9, 63.4)]);
+        assert_eq!(c.verdict, Verdict::Disagree);
+        assert!(c.why.contains("fewer than two"), "{}", c.why);
+        assert!(!c.ours.contains("flat"), "{}", c.ours);
+    }
+
+    #[test]
+    fn table_4_2_rows_agree_only_within_our_spread_at_the_thesis_count() {
+        // the thesis's rows, each drawn as ours at its |P| (thesis count = transitions + 1)
+        // with a spread of ±1 m: every row within
+        let mut ok = Vec::new();
+        for &(k, _, mean) in &THESIS_TABLE_4_2 {
+            ok.extend([
+                (k - 1, mean - 1.0, mean / 2.0),
+                (k - 1, mean + 1.0, mean / 2.0),
+            ]);
+        }
+        let c = table_4_2_magnitude(&ok);
+        assert_eq!(c.verdict, Verdict::Agree, "{}", c.ours);
+        assert!(c.ours.starts_with("6 of 6 rows within"), "{}", c.ours);
+        // keyed by transitions without the + 1, every row is off
+        let shifted: Vec<(usize, f64, f64)> = ok.iter().map(|&(k, l, t)| (k + 1, l, t)).collect();
+        assert_eq!(table_4_2_magnitude(&shifted).verdict, Verdict::Disagree);
+        // ten times longer trajectories (ours at full scale: 70–221 m against 2.5–38.4 m)
+        let long: Vec<(usize, f64, f64)> = ok.iter().map(|&(k, l, t)| (k, 10.0 * l, t)).collect();
+        let c = table_4_2_magnitude(&long);
+        assert_eq!(c.verdict, Verdict::Disagree);
+        assert!(c.ours.starts_with("0 of 6"), "{}", c.ours);
+        // the why is measured: transit per transition, and the share outside transitions
+        // (half of each trajectory was in transitions, so 95 % is outside at ten times longer)
+        assert!(
+            c.why.contains("the thesis's 4.3 m per element"),
+            "{}",
+            c.why
+        );
+        assert!(
+            c.why.contains("95 % of our trajectories driven outside"),
+            "{}",
+            c.why
+        );
+        // a row with a single path of ours is not judged within
+        let c = table_4_2_magnitude(&ok[1..]);
+        assert!(
+            c.ours.starts_with("5 of 6") && c.ours.contains("1 path(s) ✗"),
+            "{}",
+            c.ours
+        );
+    }
+
+    #[test]
+    fn the_rise_across_five_is_the_largest_step_only() {
+        // the thesis's own table: 14.3 → 32.9 m across |P| = 5
+        let thesis: Vec<(usize, usize, f64)> = THESIS_TABLE_4_2.to_vec();
+        assert_eq!(rise_claim(&thesis).verdict, Verdict::Agree);
+        // a steady rise has its largest step elsewhere
+        let steady = [(2, 5, 10.0), (3, 5, 30.0), (4, 5, 40.0), (6, 5, 45.0)];
+        let c = rise_claim(&steady);
+        assert_eq!(c.verdict, Verdict::Disagree);
+        assert!(c.ours.contains("step from |P| = 2 to 3"), "{}", c.ours);
+        assert_eq!(rise_claim(&[(3, 1, 5.0)]).verdict, Verdict::Disagree);
+    }
+
+    #[test]
+    fn the_replanning_share_agrees_within_the_thesis_interval_only() {
+        let with = |successes: usize, replanned: usize| FieldSummary {
+            replanned_successes: replanned,
+            ..summary(FieldVariant::Thesis, 200, successes, 1.0)
+        };
+        // thesis: 5 of 13 (38 %; Wilson 95 % ≈ 18–64 %)
+        assert_eq!(replanning_claim(&with(100, 38)).verdict, Verdict::Agree);
+        assert_eq!(replanning_claim(&with(100, 10)).verdict, Verdict::Disagree);
+        assert_eq!(replanning_claim(&with(100, 80)).verdict, Verdict::Disagree);
+        assert_eq!(replanning_claim(&with(0, 0)).verdict, Verdict::Disagree);
+    }
+
+    #[test]
+    fn the_success_rate_agrees_within_the_thesis_interval_only() {
+        let claim = |k: usize| {
+            claims(&output(vec![summary(FieldVariant::Thesis, 100, k, 1.0)]))
+                .into_iter()
+                .next()
+                .map(|c| c.verdict)
+        };
+        assert_eq!(claim(80), Some(Verdict::Agree));
+        assert_eq!(claim(95), Some(Verdict::Disagree));
+        assert_eq!(claim(40), Some(Verdict::Disagree));
+    }
+}
