@@ -314,14 +314,14 @@ class Schedule(TypedDict):
     fallbacks: int
 
 
-RobotAblation = Literal[
-    "full",
-    "exact",
-    "without-misses",
-    "without-detection-noise",
-    "without-false-reports",
-    "without-motion-noise",
-    "motion-only",
+RobotAblation: TypeAlias = Union[
+    Literal["full"],
+    Literal["exact"],
+    Literal["without-misses"],
+    Literal["without-detection-noise"],
+    Literal["without-false-reports"],
+    Literal["without-motion-noise"],
+    Literal["motion-only"],
 ]
 """Which of the navigating robot's errors a row of the §4.4.1 study keeps."""
 
