@@ -353,7 +353,8 @@ impl StudyConfig {
             .find(|v| !(v.is_finite() && **v > 0.0 && **v <= MAX_FACTOR))
         {
             return bad(format!(
-                "range factors and sizes must be finite, > 0 and at most {MAX_FACTOR}, got {v:?}"
+                "range factors, sizes and ablation factors must be finite, > 0 and at most \
+                 {MAX_FACTOR}, got {v:?}"
             ));
         }
         self.references.check()?;
@@ -389,7 +390,8 @@ impl StudyConfig {
         ) {
             return bad(e
                 .hint(
-                    "fewer pairs or schedule_pairs, fewer sizes or range_factors, or a longer \
+                    "fewer pairs, schedule_pairs or ablation_pairs, fewer sizes, range_factors \
+                     or robot_ablations, or a longer \
                      step",
                 )
                 .to_string());
