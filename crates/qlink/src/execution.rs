@@ -37,7 +37,7 @@ use std::collections::HashMap;
 use serde::{Deserialize, Serialize};
 
 use crate::error::{QlinkError, Result};
-use crate::perception::{Perception, distance as d};
+use crate::perception::{Look, Perception, distance as d};
 use crate::robot::Robot;
 
 /// Systematic odometry error.
@@ -229,6 +229,9 @@ pub(crate) struct Walker<'p, P: Perception> {
     moved: bool,
     /// This scan's answers: id and the detected position, if any.
     scan: HashMap<u32, Option<[f64; 2]>>,
+    /// Which way the sensor looks: a sweep where the robot stands (at the start and at the
+    /// end of each path), ahead along its true heading while it drives.
+    look: Look,
 }
 
 impl<'p, P: Perception> Walker<'p, P> {
@@ -260,6 +263,7 @@ impl<'p, P: Perception> Walker<'p, P> {
             steps: 0,
             moved: false,
             scan: HashMap::new(),
+            look: Look::Sweep,
         }
     }
 
@@ -302,7 +306,7 @@ impl<'p, P: Perception> Walker<'p, P> {
         if let Some(&at) = self.scan.get(&id) {
             return at;
         }
-        let truly = self.perception.sees(self.pos, id);
+        let truly = self.perception.sees_looking(self.pos, self.look, id);
         let at = self.report(id, truly);
         self.scan.insert(id, at);
         at
@@ -353,7 +357,7 @@ impl<'p, P: Perception> Walker<'p, P> {
 
     /// Every landmark reported from here, sorted.
     pub(crate) fn visible(&mut self) -> Vec<u32> {
-        let truly = self.perception.visible(self.pos);
+        let truly = self.perception.visible_looking(self.pos, self.look);
         if self.robot.detection.is_exact() {
             return truly;
         }
@@ -418,6 +422,7 @@ impl<'p, P: Perception> Walker<'p, P> {
         self.moved = true;
         if self.robot.motion.is_exact() {
             self.length += d(self.pos, p);
+            self.face(p[0] - self.pos[0], p[1] - self.pos[1]);
             self.pos = p;
             self.odo = p;
             return;
@@ -430,8 +435,16 @@ impl<'p, P: Perception> Walker<'p, P> {
         self.steps += 1;
         let done = self.robot.step(delta, self.heading, [self.run, self.steps]);
         self.heading = done.heading;
+        self.face(done.moved[0], done.moved[1]);
         self.pos = [self.pos[0] + done.moved[0], self.pos[1] + done.moved[1]];
         self.length += done.length;
+    }
+
+    /// The sensor looks ahead along a true step (`dx`, `dy`); a null step leaves it as it was.
+    fn face(&mut self, dx: f64, dy: f64) {
+        if dx != 0.0 || dy != 0.0 {
+            self.look = Look::Ahead(dy.atan2(dx));
+        }
     }
 
     /// Moves the plan's `frame` towards where the `anchor` landmarks (ids and where the path
@@ -529,6 +542,11 @@ impl<'p, P: Perception> Walker<'p, P> {
                     Some(e) => k == n && (i == last || (e != usize::MAX && i % e == 0)),
                 };
                 if senses {
+                    // the end of a path (or a stop of the sparse schedule): the robot stands
+                    // and sweeps its sensor
+                    if k == n && (i == last || every.is_some()) {
+                        self.look = Look::Sweep;
+                    }
                     self.sense_watched();
                     if servo {
                         self.reanchor(anchor, &mut frame);

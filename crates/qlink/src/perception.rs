@@ -9,6 +9,20 @@
 
 use std::collections::HashMap;
 
+/// Which way the sensor looks when the robot senses.
+///
+/// A robot that stands still sweeps its sensor over every direction (thesis §4.4.2: "once the
+/// robot reaches this position it performs a sensor sweep"); one that senses on the move sees
+/// what its sensor's field of view takes in ahead — a 270° scanner is blind behind it. A
+/// sensor that sees all around at every moment (the Table 4.1 robots) ignores the difference.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Look {
+    /// Every direction: the robot stands and sweeps.
+    Sweep,
+    /// Driving, facing this world heading (rad).
+    Ahead(f64),
+}
+
 /// What the robot detects.
 pub trait Perception: Sync {
     /// The landmark's position: what a detection measures. The navigator reads it only for a
@@ -18,6 +32,18 @@ pub trait Perception: Sync {
     fn sees(&self, pos: [f64; 2], id: u32) -> bool;
     /// Every landmark detected from `pos`, sorted.
     fn visible(&self, pos: [f64; 2]) -> Vec<u32>;
+    /// Whether `id` is detected from `pos` looking as `look` says. By default the sensor sees
+    /// all around ([`Perception::sees`]); a sensor with a limited field of view overrides it.
+    fn sees_looking(&self, pos: [f64; 2], look: Look, id: u32) -> bool {
+        let _ = look;
+        self.sees(pos, id)
+    }
+    /// Every landmark detected from `pos` looking as `look` says, sorted (by default
+    /// [`Perception::visible`]).
+    fn visible_looking(&self, pos: [f64; 2], look: Look) -> Vec<u32> {
+        let _ = look;
+        self.visible(pos)
+    }
     /// Every landmark the sensor could report, sorted: what a false report
     /// ([`crate::DetectionNoise::false_rate`]) takes a feature for.
     fn ids(&self) -> Vec<u32>;

@@ -354,3 +354,89 @@ fn field_style_bound_checks_name_the_assumptions_each_run_meets() {
     assert!(runs >= 20, "only {runs} successful runs");
     assert!(applied > 0, "Proposition 2 applied to no run");
 }
+
+/// Range perception that records how the robot looked at each question.
+struct LookSpy {
+    inner: RangePerception,
+    looks: Mutex<Vec<([f64; 2], qlink::Look)>>,
+}
+
+impl Perception for LookSpy {
+    fn position(&self, id: u32) -> Option<[f64; 2]> {
+        self.inner.position(id)
+    }
+    fn sees(&self, pos: [f64; 2], id: u32) -> bool {
+        self.inner.sees(pos, id)
+    }
+    fn visible(&self, pos: [f64; 2]) -> Vec<u32> {
+        self.inner.visible(pos)
+    }
+    fn sees_looking(&self, pos: [f64; 2], look: qlink::Look, id: u32) -> bool {
+        self.looks.lock().unwrap().push((pos, look));
+        self.inner.sees(pos, id)
+    }
+    fn visible_looking(&self, pos: [f64; 2], look: qlink::Look) -> Vec<u32> {
+        self.looks.lock().unwrap().push((pos, look));
+        self.inner.visible(pos)
+    }
+    fn ids(&self) -> Vec<u32> {
+        self.inner.ids()
+    }
+    fn range(&self) -> f64 {
+        self.inner.range()
+    }
+}
+
+#[test]
+fn the_robot_looks_ahead_while_it_drives_and_sweeps_where_it_stands() {
+    // issue 36 §2: the thesis's 270° scanner sees ahead on the move and is swept at stops; the
+    // navigator said neither, so a perception could not model the scanner
+    let positions = random_world(5, 30, 70.0);
+    let map = exact_map(&positions, 15.0);
+    let graph = LinkGraph::new(&map, 1, |_, _, _| 1.0).unwrap();
+    let list: Vec<(u32, [f64; 2])> = positions.clone().into_iter().collect();
+    let cfg = thesis(15.0);
+    let (mut ahead, mut sweeps_after_start, mut navigations) = (0usize, 0usize, 0usize);
+    for (&s, &ps) in positions.iter().take(6) {
+        for &t in positions.keys().step_by(5) {
+            if s == t || map.elements_with(s).is_empty() || map.elements_with(t).is_empty() {
+                continue;
+            }
+            let spy = LookSpy {
+                inner: RangePerception::new(&list, 12.0),
+                looks: Mutex::new(Vec::new()),
+            };
+            let nav = Navigator::new(&map, &graph, &spy, &cfg).unwrap();
+            let start = [ps[0] + 0.5, ps[1]];
+            nav.navigate(start, t, None, false).unwrap();
+            let looks = spy.looks.into_inner().unwrap();
+            let Some(first) = looks.first() else { continue };
+            navigations += 1;
+            // it stands at the start: a sweep
+            assert_eq!(first.1, qlink::Look::Sweep);
+            for w in looks.windows(2) {
+                let ((q, _), (p, look)) = (w[0], w[1]);
+                let step = [p[0] - q[0], p[1] - q[1]];
+                if step[0].hypot(step[1]) < 1e-9 {
+                    continue;
+                }
+                match look {
+                    qlink::Look::Ahead(h) => {
+                        // facing the way it just drove
+                        let d = (step[1].atan2(step[0]) - h + std::f64::consts::PI)
+                            .rem_euclid(std::f64::consts::TAU)
+                            - std::f64::consts::PI;
+                        assert!(d.abs() < 1e-6, "heading {h} after a step {step:?}");
+                        ahead += 1;
+                    }
+                    qlink::Look::Sweep => sweeps_after_start += 1,
+                }
+            }
+        }
+    }
+    assert!(navigations > 3, "{navigations}");
+    assert!(
+        ahead > 0 && sweeps_after_start > 0,
+        "{ahead} {sweeps_after_start}"
+    );
+}

@@ -1,8 +1,9 @@
 //! # sim2d — a 2-D world for qualitative mapping and navigation experiments
 //!
 //! Static rapier2d colliders (point landmarks as discs, walls as segments, clutter), a
-//! unicycle robot, a raycast lidar and an ideal landmark detector with full occlusion, and
-//! seeded scenarios from the thesis (DESIGN §5). The only crate that depends on rapier2d.
+//! unicycle robot, a raycast lidar and an ideal landmark detector with full occlusion, the
+//! ground under a line scanner ([`Terrain`]: where pitched ground rises into the scan plane),
+//! and seeded scenarios from the thesis (DESIGN §5). The only crate that depends on rapier2d.
 //!
 //! ## Why rapier
 //! Every geometric question — what does this ray hit, what lies between the sensor and
@@ -26,6 +27,7 @@ mod error;
 mod extractor;
 mod scenario;
 mod sensors;
+mod terrain;
 mod world;
 
 pub use error::{Result, SimError};
@@ -37,4 +39,5 @@ pub use scenario::{Frame, SCENARIOS, Scenario, scenario, write_observations_csv}
 pub use sensors::{
     Detection, DetectorConfig, DetectorNoise, LaserScan, LidarConfig, Pose, Unicycle,
 };
+pub use terrain::{Bump, Terrain};
 pub use world::{Clutter, Hit, PointLandmark, Wall, World, WorldSpec};

@@ -5,7 +5,7 @@
 //! | `pqrm-100` | 10 landmarks uniform in 100 m × 100 m (thesis §2.3.1) | one loop of radius 50 m about the centre, a frame every 16° | range 60 m, Cartesian σ = 5 m |
 //! | `qlink-200` | 200 landmarks uniform in 200 m × 200 m, at least 2 m apart, radius 0.3 m (§4.4.1; `with_landmark_radius` sets 0.1–0.7 m) | lawn-mower coverage, lanes 20 m apart | range 20 m, σ = 0.3 m, full occlusion |
 //! | `hallway` | two walls of point landmarks 6 m apart, one every 3 m (§3.4.1) | a straight drive down the middle | range 15 m, variance 0.1 m² |
-//! | `field` | a corridor between two long buildings (walls) with posts in front, bollards inside and trees by its end, a dense stand of pines, an open field with sparse posts and ground returns (§4.4.2) | a teleop-like path through all three | range 60 m, σ = 0.7 m |
+//! | `field` | a corridor between two long buildings (walls) with posts in front, bollards inside and trees by its end, a dense stand of pines, an open field with sparse posts, rocks and bushes on pitched ground, a basin off the corridor's open end (§4.4.2; the ground is a `Terrain`, which the lidar sees where it rises into the scan plane) | a teleop-like path through all three | range 60 m, σ = 0.7 m |
 
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -15,6 +15,7 @@ use crate::error::{Result, SimError, check};
 use crate::sensors::{
     Detection, DetectorConfig, DetectorNoise, LaserScan, LidarConfig, Pose, Unicycle,
 };
+use crate::terrain::{Bump, Terrain};
 use crate::world::{Clutter, PointLandmark, Wall, World, WorldSpec};
 
 /// Scenario names.
@@ -39,6 +40,9 @@ pub struct Scenario {
     pub detector: DetectorConfig,
     /// The lidar.
     pub lidar: LidarConfig,
+    /// The ground under the world, when it is not flat: where the lidar sees it instead of
+    /// the landmarks ([`Scenario::scan`]).
+    pub terrain: Option<Terrain>,
 }
 
 /// What the robot recorded at one frame.
@@ -93,15 +97,22 @@ pub fn scenario(name: &str, seed: u64, world: Option<WorldSpec>) -> Result<Scena
         "field" => field(&mut rng),
         other => return Err(SimError::UnknownScenario(other.to_owned())),
     };
+    let world = World::new(world.unwrap_or(layout.spec))?;
+    let bounds = world.spec().bounds;
     Ok(Scenario {
         name: name.to_owned(),
-        world: World::new(world.unwrap_or(layout.spec))?,
+        world,
         start: layout.start,
         waypoints: layout.waypoints,
         speed: layout.speed,
         frame_period: layout.frame_period,
         detector: layout.detector,
         lidar: LidarConfig::default(),
+        terrain: if layout.terrain.is_empty() {
+            None
+        } else {
+            Some(Terrain::new(layout.terrain, bounds)?)
+        },
     })
 }
 
@@ -113,6 +124,8 @@ struct Layout {
     speed: f64,
     frame_period: f64,
     detector: DetectorConfig,
+    /// The ground's bumps and hollows (none: flat).
+    terrain: Vec<Bump>,
 }
 
 /// Thesis §2.3: ten landmarks in a 100 m square, a circle driven about its centre, a noisy
@@ -144,6 +157,7 @@ fn pqrm_100(rng: &mut ChaCha8Rng) -> Layout {
         speed: 2.0,
         frame_period: step / 2.0,
         detector: det,
+        terrain: Vec::new(),
     }
 }
 
@@ -181,6 +195,7 @@ fn qlink_200(rng: &mut ChaCha8Rng) -> Layout {
         speed: 2.0,
         frame_period: 2.0,
         detector: det,
+        terrain: Vec::new(),
     }
 }
 
@@ -223,6 +238,7 @@ fn hallway() -> Layout {
         speed: 1.0,
         frame_period: 1.0,
         detector: det,
+        terrain: Vec::new(),
     }
 }
 
@@ -250,7 +266,8 @@ fn field_landmarks(rng: &mut ChaCha8Rng) -> (Vec<PointLandmark>, Vec<Clutter>) {
         });
         id += 1;
     }
-    // Uneven ground: returns that are not landmarks.
+    // Rocks and bushes in the open field: objects that return lidar hits and occlude but
+    // are not the site's landmarks (the ground itself is the scenario's `Terrain`).
     for _ in 0..25 {
         clutter.push(Clutter {
             pos: [rng.random_range(90.0..150.0), rng.random_range(-30.0..30.0)],
@@ -305,7 +322,8 @@ fn field_landmarks(rng: &mut ChaCha8Rng) -> (Vec<PointLandmark>, Vec<Clutter>) {
     (kept, clutter)
 }
 
-/// Thesis §4.4.2: the field site — a corridor between two buildings, pines, posts, clutter.
+/// Thesis §4.4.2: the field site — a corridor between two buildings, pines, posts, clutter,
+/// pitched ground.
 fn field(rng: &mut ChaCha8Rng) -> Layout {
     let (kept, clutter) = field_landmarks(rng);
     let walls = vec![
@@ -331,6 +349,44 @@ fn field(rng: &mut ChaCha8Rng) -> Layout {
         full_occlusion: true,
         noise: DetectorNoise::Cartesian { sigma: 0.7 },
     };
+    // The ground (drawn from its own generator so the objects above are unchanged): soft
+    // pitched terrain in the open field, a natural basin off the corridor's open end, a
+    // gentle roll under the pines; the corridor is paved (flat).
+    let mut ground = ChaCha8Rng::seed_from_u64(rng.random::<u64>());
+    let mut terrain = Vec::new();
+    let signed = |g: &mut ChaCha8Rng, lo: f64, hi: f64| {
+        let h: f64 = g.random_range(lo..hi);
+        if g.random::<bool>() { h } else { -h }
+    };
+    for _ in 0..10 {
+        terrain.push(Bump {
+            centre: [
+                ground.random_range(90.0..150.0),
+                ground.random_range(-30.0..30.0),
+            ],
+            sigma: ground.random_range(4.0..10.0),
+            height: signed(&mut ground, 0.5, 1.5),
+        });
+    }
+    let side = if ground.random::<bool>() { 1.0 } else { -1.0 };
+    terrain.push(Bump {
+        centre: [
+            ground.random_range(-18.0..-8.0),
+            side * ground.random_range(18.0..30.0),
+        ],
+        sigma: ground.random_range(5.0..8.0),
+        height: -ground.random_range(1.0..2.0),
+    });
+    for _ in 0..6 {
+        terrain.push(Bump {
+            centre: [
+                ground.random_range(45.0..80.0),
+                ground.random_range(20.0..45.0),
+            ],
+            sigma: ground.random_range(3.0..6.0),
+            height: signed(&mut ground, 0.2, 0.5),
+        });
+    }
     let path = vec![
         [40.0, 0.0],
         [60.0, 10.0],
@@ -350,10 +406,29 @@ fn field(rng: &mut ChaCha8Rng) -> Layout {
         speed: 1.5,
         frame_period: 1.0,
         detector: det,
+        terrain,
     }
 }
 
 impl Scenario {
+    /// A lidar scan from `pose`: the world's ray casts, and where the scenario's ground rises
+    /// into the scan plane, ground returns ([`Terrain::ground_returns`]).
+    ///
+    /// # Errors
+    /// As [`LidarConfig::validate`].
+    pub fn scan(
+        &self,
+        pose: &Pose,
+        cfg: &LidarConfig,
+        rng: &mut impl rand::Rng,
+    ) -> Result<LaserScan> {
+        let mut scan = self.world.lidar(pose, cfg, rng)?;
+        if let Some(t) = &self.terrain {
+            t.ground_returns(pose, cfg, &mut scan, rng)?;
+        }
+        Ok(scan)
+    }
+
     /// The same scenario with every point landmark's radius set to `radius` (the landmark
     /// size of the occlusion study, thesis §4.4.1: 0.1 to 0.7 m).
     ///
@@ -421,7 +496,7 @@ impl Scenario {
                     last_frame = Some(step);
                     let detections = self.world.detect(&robot.pose, &self.detector, &mut rng)?;
                     let scan = if lidar {
-                        Some(self.world.lidar(&robot.pose, &self.lidar, &mut rng)?)
+                        Some(self.scan(&robot.pose, &self.lidar, &mut rng)?)
                     } else {
                         None
                     };

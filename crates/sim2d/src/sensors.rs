@@ -27,6 +27,13 @@ impl Pose {
         let (dx, dy) = (p[0] - self.x, p[1] - self.y);
         [c * dx + s * dy, -s * dx + c * dy]
     }
+
+    /// A point of the robot's frame in the world frame (the inverse of [`Pose::to_local`]).
+    #[must_use]
+    pub fn to_world(&self, p: [f64; 2]) -> [f64; 2] {
+        let (s, c) = self.theta.sin_cos();
+        [self.x + c * p[0] - s * p[1], self.y + s * p[0] + c * p[1]]
+    }
 }
 
 /// A unicycle / differential-drive robot with velocity limits, integrated at a fixed step.
@@ -95,6 +102,14 @@ pub struct LidarConfig {
     pub range_sigma: f64,
     /// Probability that a ray returns nothing.
     pub dropout: f64,
+    /// Height of the scan plane above the ground (m): where the terrain rises above it, the
+    /// rays see the ground ([`crate::Terrain`]). 0.3 m: a Hokuyo on a Clearpath Jackal.
+    #[serde(default = "jackal_mount")]
+    pub mount_height: f64,
+}
+
+fn jackal_mount() -> f64 {
+    0.3
 }
 
 impl Default for LidarConfig {
@@ -106,6 +121,7 @@ impl Default for LidarConfig {
             max_range: 30.0,
             range_sigma: 0.0,
             dropout: 0.0,
+            mount_height: jackal_mount(),
         }
     }
 }
@@ -131,7 +147,16 @@ impl LidarConfig {
         )?;
         check((0.0..=1.0).contains(&self.dropout), || {
             format!("dropout {} must be in [0, 1]", self.dropout)
-        })
+        })?;
+        check(
+            self.mount_height.is_finite() && self.mount_height >= 0.0,
+            || {
+                format!(
+                    "mount height {} m must be finite and ≥ 0",
+                    self.mount_height
+                )
+            },
+        )
     }
 
     /// Ray angles relative to the heading, from −fov/2 to +fov/2 (a full circle omits the

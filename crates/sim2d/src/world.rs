@@ -89,6 +89,8 @@ pub enum Hit {
     Wall(usize),
     /// The i-th clutter disc.
     Clutter(usize),
+    /// The ground (see [`crate::Terrain`]): a lidar ray that met the terrain.
+    Ground,
 }
 
 impl Hit {
@@ -97,6 +99,7 @@ impl Hit {
             Self::Landmark(i) => i as u128,
             Self::Wall(i) => (1u128 << 64) | i as u128,
             Self::Clutter(i) => (2u128 << 64) | i as u128,
+            Self::Ground => 3u128 << 64,
         }
     }
 
@@ -105,7 +108,8 @@ impl Hit {
         match v >> 64 {
             0 => Self::Landmark(i),
             1 => Self::Wall(i),
-            _ => Self::Clutter(i),
+            2 => Self::Clutter(i),
+            _ => Self::Ground,
         }
     }
 }

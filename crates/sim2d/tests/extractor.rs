@@ -12,11 +12,14 @@ fn extractor_finds_landmarks_and_recognition_is_precise() {
         range_sigma: 0.01,
         ..LidarConfig::default()
     };
+    // the objects alone: what the ground does is `the_pitched_ground_fills_scans_where_it_rolls`
+    sc.terrain = None;
     let frames = sc.run(2, true).unwrap();
     let cfg = ExtractorConfig::default();
     let spec = sc.world.spec().clone();
     let (mut cands, mut landmark_cands, mut clutter_cands, mut fit_err, mut centroid_err) =
         (0usize, 0usize, 0usize, 0.0, 0.0);
+    let mut ground_cands = 0usize;
     let mut recognizer = TriangleRecognizer::new(0.3);
     let mut id_truth: std::collections::BTreeMap<u32, usize> = Default::default();
     let (mut recognised, mut correct, mut seen_before, mut recalled) =
@@ -38,8 +41,10 @@ fn extractor_finds_landmarks_and_recognition_is_precise() {
                 fit_err += (c.centre[0] - t[0]).hypot(c.centre[1] - t[1]);
                 centroid_err += (c.centroid[0] - t[0]).hypot(c.centroid[1] - t[1]);
             }
-            if let Some(Hit::Clutter(_)) = c.truth {
-                clutter_cands += 1;
+            match c.truth {
+                Some(Hit::Clutter(_)) => clutter_cands += 1,
+                Some(Hit::Ground) => ground_cands += 1,
+                _ => {}
             }
             positions.push(c.centre);
             truths.push(match c.truth {
@@ -68,10 +73,11 @@ fn extractor_finds_landmarks_and_recognition_is_precise() {
             ever_seen.insert(*t);
         }
     }
-    // Ground returns (clutter) look like trunks to a lidar: the thesis's false landmarks. The
-    // extractor must not make landmarks out of anything else (walls, empty space).
-    let precision = landmark_cands as f64 / (cands - clutter_cands) as f64;
-    eprintln!("{clutter_cands} candidates are ground returns (clutter)");
+    // Rocks and bushes (clutter) and the ground on pitched terrain look like trunks to a lidar:
+    // the thesis's false landmarks. The extractor must not make landmarks out of anything
+    // else (walls, empty space).
+    let precision = landmark_cands as f64 / (cands - clutter_cands - ground_cands) as f64;
+    eprintln!("{clutter_cands} candidates are clutter, {ground_cands} the ground");
     let (fit, centroid) = (
         fit_err / landmark_cands as f64,
         centroid_err / landmark_cands as f64,
@@ -88,7 +94,7 @@ fn extractor_finds_landmarks_and_recognition_is_precise() {
     assert!(cands > 100, "the field has plenty of trunks in range");
     assert!(
         precision > 0.9,
-        "apart from ground returns, point candidates are landmarks"
+        "apart from clutter and the ground, point candidates are landmarks"
     );
     assert!(
         fit < centroid,
@@ -151,4 +157,42 @@ fn identify_does_not_learn_and_two_votes_need_four_landmarks() {
         vec![Some(0), Some(1), Some(2), Some(3)],
         "four landmarks make three triangles through each"
     );
+}
+
+#[test]
+fn the_pitched_ground_fills_scans_where_it_rolls() {
+    let sc = scenario("field", 2, None).unwrap();
+    assert!(sc.terrain.is_some());
+    let frames = sc.run(2, true).unwrap();
+    // share of rays on the ground: on the paved corridor's axis, and in the open field
+    let share = |inside: &dyn Fn(&sim2d::Pose) -> bool| {
+        let (mut g, mut n) = (0usize, 0usize);
+        for f in frames.iter().filter(|f| inside(&f.pose)) {
+            let scan = f.scan.as_ref().unwrap();
+            g += scan
+                .hits
+                .iter()
+                .filter(|h| **h == Some(Hit::Ground))
+                .count();
+            n += scan.hits.len();
+        }
+        assert!(n > 0);
+        g as f64 / n as f64
+    };
+    let corridor = share(&|p| (0.0..35.0).contains(&p.x) && p.y.abs() < 7.5);
+    let field = share(&|p| p.x > 90.0);
+    eprintln!("rays on the ground: corridor {corridor:.3}, open field {field:.3}");
+    assert!(field > 0.05 && field > 2.0 * corridor, "{field} {corridor}");
+    // the ground's returns make point candidates of their own (false landmarks)
+    let cfg = ExtractorConfig::default();
+    let ground_cands: usize = frames
+        .iter()
+        .map(|f| {
+            extract(f.scan.as_ref().unwrap(), &cfg)
+                .iter()
+                .filter(|c| c.kind == CandidateKind::Point && c.truth == Some(Hit::Ground))
+                .count()
+        })
+        .sum();
+    assert!(ground_cands > 0);
 }

@@ -53,6 +53,7 @@ fn run(seed: u64, beams: usize, extractor: ExtractorConfig) -> (Vec<usize>, usiz
         max_range: 20.0,
         range_sigma: 0.02,
         dropout: 0.02,
+        ..LidarConfig::default()
     };
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed ^ 0x5ca7);
     // As `qrm map --format mcap` reads scans (qrm-log): mapping needs three candidates.

@@ -86,6 +86,7 @@ fn lidar_ranges_equal_analytic_intersections() {
             max_range: 60.0,
             range_sigma: 0.0,
             dropout: 0.0,
+            ..LidarConfig::default()
         };
         let scan = world.lidar(&pose, &cfg, &mut rng).unwrap();
         for (a, r) in scan.angles.iter().zip(&scan.ranges) {

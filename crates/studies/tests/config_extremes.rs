@@ -49,9 +49,10 @@ fn slot<'a>(v: &'a mut Value, path: &str) -> &'a mut Value {
 /// Integer fields that may be 10¹² without driving the work: seeds, thresholds, a cap the
 /// recording bounds anyway, and the reasoning study's `world` fields its part (b) does not
 /// use (it simulates the world's geometry only).
-const COUNT_FIELDS_NOT_WORK: [(&str, &str); 5] = [
+const COUNT_FIELDS_NOT_WORK: [(&str, &str); 6] = [
     ("*", "seed"),
     ("field", "min_observations"),
+    ("field", "min_landmark_scans"),
     ("real-data", "max_frames"),
     ("reason", "study.world.samples"),
     ("reason", "study.world.trials"),

@@ -54,6 +54,19 @@ fn the_lidar_only_map_is_a_hybrid_map_with_all_wall_states() {
     assert!(s.point_elements > 100 && s.wall_elements > 10, "{s:?}");
     assert_eq!(f.map.layers().len(), 2);
     assert!(s.effective_range > 3.0 && s.effective_range < 30.0, "{s:?}");
+    // issue 36 §2: the walls are recognised from the scans: the corridor's width (15 m) and
+    // length (40 m) as the drive measured them, the frame placed near where it truly is
+    let walls = f.walls.expect("the corridor recognised");
+    assert!((walls.width - 15.0).abs() < 0.5, "{walls:?}");
+    assert!(
+        (walls.length.expect("a length") - 40.0).abs() < 2.0,
+        "{walls:?}"
+    );
+    assert!(s.wall_frames > 10 && s.wall_frame_error < 2.0, "{s:?}");
+    // the ground on pitched terrain takes some of the drive's rays; only landmarks recognised
+    // in enough scans are mapped
+    assert!(s.ground_share > 0.01 && s.ground_share < 0.6, "{s:?}");
+    assert!(s.mapped_ids < 60, "{s:?}");
     // the recogniser's ids are not the world's: the truth table maps them to objects
     assert!(f.truth.len() >= s.real_landmarks);
     assert!(
@@ -117,6 +130,38 @@ fn lidar_perception_sees_only_what_it_identifies() {
     }
     assert!(checked >= 2, "identified landmarks mid-drive: {checked}");
     assert!((p.range() - f.stats.effective_range).abs() < 1e-12);
+    // the walls' frame as the scan places it, near the truth
+    p.visible([20.0, 0.0]);
+    for (id, truth) in [WALL_FRAME_START, WALL_FRAME_END]
+        .into_iter()
+        .zip(f.wall_frame)
+    {
+        let at = p.position(id).expect("the frame in view");
+        assert!(
+            (at[0] - truth[0]).hypot(at[1] - truth[1]) < 2.0,
+            "{at:?} vs {truth:?}"
+        );
+    }
+    // driving, the 270° scanner is blind behind: nothing it identifies lies there
+    for heading in [0.0, 1.5, 3.0, -2.0] {
+        let look = qlink::Look::Ahead(heading);
+        for id in p.visible_looking(at, look) {
+            let Some(sim2d::Hit::Landmark(i)) = f.truth.get(&id) else {
+                continue;
+            };
+            if p.last_consistent(id) != Some(true) {
+                continue;
+            }
+            let t = spec.landmarks[*i].pos;
+            let bearing = (t[1] - at[1]).atan2(t[0] - at[0]) - heading;
+            let off = (bearing + std::f64::consts::PI).rem_euclid(std::f64::consts::TAU)
+                - std::f64::consts::PI;
+            assert!(
+                off.abs() < 136f64.to_radians(),
+                "{id} at {off} rad off the heading"
+            );
+        }
+    }
 }
 
 #[test]

@@ -384,6 +384,10 @@ class FieldMapping(TypedDict):
     point_elements: int
     wall_elements: int
     wall_frames: int
+    wall_frame_error: float
+    """mean distance (m) of the walls' frame points as the scans placed them from the truth"""
+    ground_share: float
+    """share of the drive's lidar rays that met the pitched ground"""
     effective_range: float
 
 
@@ -446,6 +450,10 @@ class FieldTrial(TypedDict):
     length: float
     final_distance: float
     transit_length: float
+    ground_share: float
+    """share of the trial's lidar rays that met the pitched ground"""
+    final_ground_share: float
+    """the same over its last 20 scans"""
     bounds: List[BoundCheck]
     """at the lidar's range and at the effective range"""
 

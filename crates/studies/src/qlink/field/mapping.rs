@@ -10,6 +10,7 @@ use sim2d::{CandidateKind, ExtractorConfig, Hit, Pose, TriangleRecognizer, World
 
 use qlink::{Layer, QualitativeMap};
 
+use super::walls::{self, WallModel, WallSighting};
 use super::{FieldParams, WALL_FRAME_END, WALL_FRAME_START};
 use crate::error::{Result, StudyError};
 /// Figures of the mapping drive.
@@ -21,7 +22,8 @@ pub struct MappingStats {
     pub mapped_ids: usize,
     /// Of those, ids most often recognised from a real landmark.
     pub real_landmarks: usize,
-    /// Of those, ids most often recognised from clutter (ground returns) or a wall.
+    /// Of those, ids most often recognised from something else: clutter (rocks, bushes), the
+    /// ground, a wall, or nothing the extractor's majority agrees on.
     pub false_landmarks: usize,
     /// Landmarks in the world.
     pub world_landmarks: usize,
@@ -29,8 +31,15 @@ pub struct MappingStats {
     pub detections: usize,
     /// Detections whose object differs from the one their id was most often recognised from.
     pub aliased_detections: usize,
-    /// Scans in which both walls were extracted.
+    /// Scans in which both walls were recognised.
     pub wall_frames: usize,
+    /// Mean distance of the walls' frame points as the drive's scans placed them from where
+    /// they truly are (m): how well the walls are recognised from scans.
+    #[serde(default)]
+    pub wall_frame_error: f64,
+    /// Share of the drive's lidar rays that met the ground (pitched terrain).
+    #[serde(default)]
+    pub ground_share: f64,
     /// Elements of the point-triplet layer.
     pub point_elements: usize,
     /// Elements of the wall layer.
@@ -58,8 +67,11 @@ pub struct FieldMap {
     /// Per mapped id: fraction of the drive's scans within effective range in which it was
     /// recognised.
     pub visibility: BTreeMap<u32, f64>,
-    /// The walls' frame: world positions of [`WALL_FRAME_START`] and [`WALL_FRAME_END`].
+    /// Ground truth: the walls' frame, world positions of [`WALL_FRAME_START`] and
+    /// [`WALL_FRAME_END`] (for scoring; the robot places them from its scans, `walls`).
     pub wall_frame: [[f64; 2]; 2],
+    /// The corridor as the drive learned it from its scans (`None`: never recognised).
+    pub walls: Option<WallModel>,
     /// Figures.
     pub stats: MappingStats,
 }
@@ -92,23 +104,21 @@ fn wall_frame(world: &World) -> Result<[[f64; 2]; 2]> {
     Ok([mid(w1.end, w2.end), mid(w1.start, w2.start)])
 }
 
-/// Point candidates and whether both walls were extracted, from one scan.
+/// Point candidates and the walls recognised (see [`walls`]), from one scan of `lidar`;
+/// `width` is the mapped corridor's, when known.
 pub(super) fn point_and_walls(
     scan: &sim2d::LaserScan,
     cfg: &ExtractorConfig,
-) -> (Vec<sim2d::Candidate>, bool) {
+    lidar: &sim2d::LidarConfig,
+    width: Option<f64>,
+) -> (Vec<sim2d::Candidate>, Option<WallSighting>) {
     let cands = extract(scan, cfg);
-    let wall_seen = |i: usize| {
-        cands
-            .iter()
-            .any(|c| c.kind == CandidateKind::Wall && c.truth == Some(Hit::Wall(i)))
-    };
-    let both = wall_seen(0) && wall_seen(1);
+    let sighting = walls::sight(&cands, lidar.max_range, lidar.fov, width);
     let points = cands
         .into_iter()
         .filter(|c| c.kind == CandidateKind::Point)
         .collect();
-    (points, both)
+    (points, sighting)
 }
 
 /// Every triplet of a scan's observations: its sorted ids and the three observations.
@@ -134,12 +144,15 @@ struct Recognised {
     distances: Vec<f64>,
     /// Point detections.
     detections: usize,
-    /// Scans in which both walls were extracted.
+    /// Scans in which both walls were recognised.
     wall_frames: usize,
+    /// Rays of the drive's scans, and of those the ground took.
+    rays: usize,
+    ground_rays: usize,
     /// The drive's true positions.
     drive: Vec<[f64; 2]>,
-    /// Per scan: time, its observations (unique ids), both walls extracted, the pose.
-    per_frame: Vec<(f64, Vec<Observation>, bool, Pose)>,
+    /// Per scan: time, its observations (unique ids), the walls recognised, the pose.
+    per_frame: Vec<(f64, Vec<Observation>, Option<WallSighting>, Pose)>,
 }
 
 /// Pass 1: every scan through the extractor and the recogniser.
@@ -147,6 +160,7 @@ fn recognise(
     frames: &[sim2d::Frame],
     recognizer: &mut TriangleRecognizer,
     cov: [[f64; 2]; 2],
+    lidar: &sim2d::LidarConfig,
 ) -> Result<Recognised> {
     let extractor = ExtractorConfig::default();
     let mut r = Recognised {
@@ -155,13 +169,21 @@ fn recognise(
         distances: Vec::new(),
         detections: 0,
         wall_frames: 0,
+        rays: 0,
+        ground_rays: 0,
         drive: Vec::with_capacity(frames.len()),
         per_frame: Vec::new(),
     };
     for (fi, f) in frames.iter().enumerate() {
         r.drive.push([f.pose.x, f.pose.y]);
         let Some(scan) = &f.scan else { continue };
-        let (cands, walls) = point_and_walls(scan, &extractor);
+        r.rays += scan.ranges.len();
+        r.ground_rays += scan
+            .hits
+            .iter()
+            .filter(|h| **h == Some(Hit::Ground))
+            .count();
+        let (cands, walls) = point_and_walls(scan, &extractor, lidar, None);
         let ids = recognizer.recognise(&cands.iter().map(|c| c.centre).collect::<Vec<_>>());
         let mut obs = Vec::new();
         let mut unique = BTreeSet::new();
@@ -184,7 +206,7 @@ fn recognise(
             r.distances.push(x.hypot(y));
             obs.push(Observation::new(LandmarkId(id), cand.centre, cov)?);
         }
-        if walls {
+        if walls.is_some() {
             r.wall_frames += 1;
         }
         r.per_frame.push((f.t, obs, walls, f.pose));
@@ -193,11 +215,12 @@ fn recognise(
 }
 
 /// Pass 2: the two layers, from the triplets (and, for the walls' layer, the landmarks) seen
-/// in at least `min_observations` scans.
+/// in at least `min_observations` scans, of landmarks recognised in at least
+/// `min_landmark_scans`.
 fn layers(
     r: &Recognised,
     params: &FieldParams,
-    frame_pts: [[f64; 2]; 2],
+    model: Option<WallModel>,
     cov: [[f64; 2]; 2],
 ) -> Result<(Pqrm, Pqrm)> {
     let config = PqrmConfig {
@@ -211,7 +234,10 @@ fn layers(
             *count.entry(k).or_insert(0) += 1;
         }
     }
-    let often = |k: &[u32; 3]| count.get(k).is_some_and(|&n| n >= params.min_observations);
+    let mapped = |id: &u32| r.seen_at.get(id).map_or(0, Vec::len) >= params.min_landmark_scans;
+    let often = |k: &[u32; 3]| {
+        count.get(k).is_some_and(|&n| n >= params.min_observations) && k.iter().all(mapped)
+    };
     let mut points_layer = Pqrm::new(Calculus::builtin("left-right")?, config)?;
     let mut wall_layer = Pqrm::new(wall_calculus()?, config)?;
     for (t, obs, walls, pose) in &r.per_frame {
@@ -220,11 +246,11 @@ fn layers(
                 points_layer.update(&Scan::new(*t, 0, three.to_vec())?)?;
             }
         }
-        if *walls {
-            let sl = pose.to_local(frame_pts[0]);
-            let el = pose.to_local(frame_pts[1]);
+        if let (Some(sighting), Some(model)) = (walls, model) {
+            let [sl, el] = sighting.frame(pose, model.heading, model.length);
             for o in obs {
-                if r.seen_at.get(&o.id.0).map_or(0, Vec::len) < params.min_observations {
+                let scans = r.seen_at.get(&o.id.0).map_or(0, Vec::len);
+                if scans < params.min_observations || !mapped(&o.id.0) {
                     continue;
                 }
                 let scan = Scan::new(
@@ -300,7 +326,27 @@ pub fn map_field(params: &FieldParams) -> Result<FieldMap> {
     let mut recognizer = TriangleRecognizer::new(params.tolerance).with_min_votes(params.min_votes);
     let var = params.sigma * params.sigma;
     let cov = [[var, 0.0], [0.0, var]];
-    let mut r = recognise(&frames, &mut recognizer, cov)?;
+    let mut r = recognise(&frames, &mut recognizer, cov, &scenario.lidar)?;
+    let sightings: Vec<(Pose, WallSighting)> = r
+        .per_frame
+        .iter()
+        .filter_map(|(_, _, s, pose)| s.map(|s| (*pose, s)))
+        .collect();
+    let wall_model = walls::learn(&sightings);
+    // how far the scans put the frame from the truth (scoring only)
+    let wall_frame_error = wall_model.map_or(0.0, |m| {
+        let errors: Vec<f64> = sightings
+            .iter()
+            .flat_map(|(pose, s)| {
+                let f = s.frame(pose, m.heading, m.length);
+                (0..2).map(move |k| {
+                    let p = pose.to_world(f[k]);
+                    (p[0] - frame_pts[k][0]).hypot(p[1] - frame_pts[k][1])
+                })
+            })
+            .collect();
+        errors.iter().sum::<f64>() / errors.len().max(1) as f64
+    });
     // an id stands for the object it was most often recognised from
     let truth: BTreeMap<u32, Hit> = r
         .hits
@@ -317,7 +363,7 @@ pub fn map_field(params: &FieldParams) -> Result<FieldMap> {
                 .sum::<usize>()
         })
         .sum();
-    let (points_layer, wall_layer) = layers(&r, params, frame_pts, cov)?;
+    let (points_layer, wall_layer) = layers(&r, params, wall_model, cov)?;
     r.distances.sort_by(f64::total_cmp);
     let effective_range = r
         .distances
@@ -348,6 +394,8 @@ pub fn map_field(params: &FieldParams) -> Result<FieldMap> {
         detections: r.detections,
         aliased_detections: aliased,
         wall_frames: r.wall_frames,
+        wall_frame_error,
+        ground_share: r.ground_rays as f64 / r.rays.max(1) as f64,
         point_elements,
         wall_elements,
         effective_range,
@@ -361,6 +409,7 @@ pub fn map_field(params: &FieldParams) -> Result<FieldMap> {
         recognitions: r.hits,
         visibility,
         wall_frame: frame_pts,
+        walls: wall_model,
         stats,
     })
 }

@@ -1,14 +1,14 @@
 //! Navigation-time perception from the lidar: a sweep, the extractor and identification
 //! against the mapping drive's catalogue (see the parent module).
 
-use std::collections::{BTreeMap, BTreeSet};
+use std::collections::{BTreeMap, BTreeSet, VecDeque};
 use std::sync::Mutex;
 
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
-use sim2d::{ExtractorConfig, LidarConfig, Pose};
+use sim2d::{ExtractorConfig, Hit, LidarConfig, Pose};
 
-use qlink::Perception;
+use qlink::{Look, Perception};
 
 use super::mapping::{FieldMap, point_and_walls};
 use super::{WALL_FRAME_END, WALL_FRAME_START};
@@ -27,20 +27,33 @@ struct Seen {
 #[derive(Debug)]
 struct LidarState {
     rng: ChaCha8Rng,
-    cache: Option<([f64; 2], Vec<Seen>)>,
+    cache: Option<([f64; 2], Look, Vec<Seen>)>,
     last: BTreeMap<u32, Seen>,
     scans: usize,
     detections: usize,
     aliased: usize,
+    /// Rays of every scan, and of those the ground took.
+    rays: usize,
+    ground: usize,
+    /// (ground, rays) of the last [`RECENT_SCANS`] scans.
+    recent: VecDeque<(usize, usize)>,
 }
 
-/// Navigation-time perception from the lidar (see the module docs): a full sweep, the
-/// extractor, and triangle identification against the mapping drive's catalogue (frozen:
-/// see [`sim2d::TriangleRecognizer::identify`]).
+/// Scans "at the end" of a navigation, for [`LidarPerception::ground_share`]: where a robot
+/// that gave up was looking when it did.
+pub const RECENT_SCANS: usize = 20;
+
+/// Navigation-time perception from the lidar (see the module docs): the scanner's 270° ahead
+/// while the robot drives, a full sweep where it stands; the extractor; triangle
+/// identification against the mapping drive's catalogue (frozen: see
+/// [`sim2d::TriangleRecognizer::identify`]).
 #[derive(Debug)]
 pub struct LidarPerception<'m> {
     field: &'m FieldMap,
-    lidar: LidarConfig,
+    /// The scanner as mounted: its field of view ahead of the robot.
+    ahead: LidarConfig,
+    /// A sweep: the scanner turned through a full circle at the same angular resolution.
+    sweep: LidarConfig,
     extractor: ExtractorConfig,
     mapped: BTreeSet<u32>,
     state: Mutex<LidarState>,
@@ -50,14 +63,18 @@ impl<'m> LidarPerception<'m> {
     /// Perception for one navigation; `seed` drives the scanner's range noise.
     #[must_use]
     pub fn new(field: &'m FieldMap, seed: u64) -> Self {
-        let lidar = LidarConfig {
+        let ahead = field.scenario.lidar;
+        // the rays a full turn holds at the scanner's own resolution (1,440 for 270°/1,081)
+        let resolution = ahead.fov / (ahead.rays.max(2) - 1) as f64;
+        let sweep = LidarConfig {
             fov: std::f64::consts::TAU,
-            rays: 1440,
-            ..field.scenario.lidar
+            rays: (std::f64::consts::TAU / resolution).round().max(1.0) as usize,
+            ..ahead
         };
         Self {
             field,
-            lidar,
+            ahead,
+            sweep,
             extractor: ExtractorConfig::default(),
             mapped: field.map.landmarks().into_iter().collect(),
             state: Mutex::new(LidarState {
@@ -67,31 +84,50 @@ impl<'m> LidarPerception<'m> {
                 scans: 0,
                 detections: 0,
                 aliased: 0,
+                rays: 0,
+                ground: 0,
+                recent: VecDeque::new(),
             }),
         }
     }
 
-    fn observe(&self, pos: [f64; 2]) -> Vec<Seen> {
+    fn observe(&self, pos: [f64; 2], look: Look) -> Vec<Seen> {
         let Ok(mut st) = self.state.lock() else {
             return Vec::new();
         };
-        if let Some((p, seen)) = &st.cache
+        if let Some((p, l, seen)) = &st.cache
             && *p == pos
+            && *l == look
         {
             return seen.clone();
         }
+        let (theta, lidar) = match look {
+            Look::Sweep => (0.0, &self.sweep),
+            Look::Ahead(heading) => (heading, &self.ahead),
+        };
         let pose = Pose {
             x: pos[0],
             y: pos[1],
-            theta: 0.0,
+            theta,
         };
-        let world = &self.field.scenario.world;
-        let scan = match world.lidar(&pose, &self.lidar, &mut st.rng) {
+        let scan = match self.field.scenario.scan(&pose, lidar, &mut st.rng) {
             Ok(s) => s,
             Err(_) => return Vec::new(),
         };
         st.scans += 1;
-        let (cands, walls) = point_and_walls(&scan, &self.extractor);
+        let ground = scan
+            .hits
+            .iter()
+            .filter(|h| **h == Some(Hit::Ground))
+            .count();
+        st.rays += scan.ranges.len();
+        st.ground += ground;
+        st.recent.push_back((ground, scan.ranges.len()));
+        if st.recent.len() > RECENT_SCANS {
+            st.recent.pop_front();
+        }
+        let width = self.field.walls.map(|m| m.width);
+        let (cands, walls) = point_and_walls(&scan, &self.extractor, lidar, width);
         let ids = self
             .field
             .recognizer
@@ -109,18 +145,16 @@ impl<'m> LidarPerception<'m> {
             }
             seen.push(Seen {
                 id,
-                pos: [pos[0] + c.centre[0], pos[1] + c.centre[1]],
+                pos: pose.to_world(c.centre),
                 consistent,
             });
         }
-        if walls {
-            for (id, p) in [WALL_FRAME_START, WALL_FRAME_END]
-                .into_iter()
-                .zip(self.field.wall_frame)
-            {
+        if let (Some(sighting), Some(model)) = (walls, self.field.walls) {
+            let frame = sighting.frame(&pose, model.heading, model.length);
+            for (id, p) in [WALL_FRAME_START, WALL_FRAME_END].into_iter().zip(frame) {
                 seen.push(Seen {
                     id,
-                    pos: p,
+                    pos: pose.to_world(p),
                     consistent: true,
                 });
             }
@@ -129,7 +163,7 @@ impl<'m> LidarPerception<'m> {
         for s in &seen {
             st.last.insert(s.id, *s);
         }
-        st.cache = Some((pos, seen.clone()));
+        st.cache = Some((pos, look, seen.clone()));
         seen
     }
 
@@ -140,6 +174,25 @@ impl<'m> LidarPerception<'m> {
             .lock()
             .ok()
             .and_then(|s| s.last.get(&id).map(|x| x.consistent))
+    }
+
+    /// The share of the scans' rays that met the ground: over every scan, and over the last
+    /// [`RECENT_SCANS`].
+    #[must_use]
+    pub fn ground_share(&self) -> (f64, f64) {
+        self.state
+            .lock()
+            .map(|s| {
+                let (g, r) = s
+                    .recent
+                    .iter()
+                    .fold((0, 0), |(g, r), &(a, b)| (g + a, r + b));
+                (
+                    s.ground as f64 / s.rays.max(1) as f64,
+                    g as f64 / r.max(1) as f64,
+                )
+            })
+            .unwrap_or((0.0, 0.0))
     }
 
     /// (scans, detections of mapped ids, detections on the wrong object).
@@ -160,11 +213,18 @@ impl Perception for LidarPerception<'_> {
             .ok()
             .and_then(|s| s.last.get(&id).map(|x| x.pos))
     }
+    /// From a standing robot: a sweep.
     fn sees(&self, pos: [f64; 2], id: u32) -> bool {
-        self.observe(pos).iter().any(|s| s.id == id)
+        self.sees_looking(pos, Look::Sweep, id)
     }
     fn visible(&self, pos: [f64; 2]) -> Vec<u32> {
-        self.observe(pos).iter().map(|s| s.id).collect()
+        self.visible_looking(pos, Look::Sweep)
+    }
+    fn sees_looking(&self, pos: [f64; 2], look: Look, id: u32) -> bool {
+        self.observe(pos, look).iter().any(|s| s.id == id)
+    }
+    fn visible_looking(&self, pos: [f64; 2], look: Look) -> Vec<u32> {
+        self.observe(pos, look).iter().map(|s| s.id).collect()
     }
     fn ids(&self) -> Vec<u32> {
         self.mapped.iter().copied().collect()

@@ -84,6 +84,13 @@ pub struct FieldTrial {
     pub detections: usize,
     /// Of those, on the wrong object.
     pub aliased: usize,
+    /// Share of the trial's lidar rays that met the ground (pitched terrain).
+    #[serde(default)]
+    pub ground_share: f64,
+    /// The same over its last scans ([`super::perception::RECENT_SCANS`]): where the robot
+    /// was looking when it arrived or gave up.
+    #[serde(default)]
+    pub final_ground_share: f64,
     /// Length driven in transitions (m): what Propositions 2 and 4 bound.
     pub transit_length: f64,
     /// The first plan's map elements.
@@ -147,9 +154,20 @@ pub fn tasks(
         progress.check()?;
         attempts += 1;
         if attempts > 1000 * params.trials {
-            return Err(StudyError::InvalidParameter(
-                "could not draw start/goal pairs: no goal out of view from any start".into(),
-            ));
+            return Err(StudyError::InvalidParameter(format!(
+                "world of seed {}: only {} of {} start/goal pairs found in {} draws ({} starts \
+                 blocked, {} goals in view at the start, {} starts in no element, {} pairs with \
+                 no link-graph path): the map ({} elements) is too sparse to plan in",
+                params.seed,
+                out.len(),
+                params.trials,
+                attempts - 1,
+                draws.blocked,
+                draws.trivial,
+                draws.no_start,
+                draws.no_path,
+                field.map.elements().len()
+            )));
         }
         let base = field.drive[rng.random_range(0..field.drive.len())];
         let (r, a) = (
@@ -229,7 +247,8 @@ pub(super) fn true_position(field: &FieldMap, id: u32) -> Option<[f64; 2]> {
 /// with the assumptions checked against the simulated site: a landmark is sensed from `x`
 /// when the extractor can get its minimum number of returns from it there (its angular
 /// width over the scanner's resolution) within the scanner's range, with nothing in between
-/// (sim2d's full occlusion); the walls' virtual frame points count as sensed within range.
+/// (sim2d's full occlusion) and over the ground (its terrain); the walls' virtual frame
+/// points count as sensed within range.
 /// The field's controllers search, so Assumption 4 (straight lines) never holds.
 #[must_use]
 pub fn bound_checks(
@@ -260,7 +279,13 @@ pub fn bound_checks(
                 } else {
                     2.0 * (r / d).asin() / resolution
                 };
-                returns >= min_returns && world.is_fully_visible(x, *i)
+                returns >= min_returns
+                    && world.is_fully_visible(x, *i)
+                    && field
+                        .scenario
+                        .terrain
+                        .as_ref()
+                        .is_none_or(|t| t.clears(x, p, lidar.mount_height))
             }
             _ => matches!(id, WALL_FRAME_START | WALL_FRAME_END),
         }
@@ -388,6 +413,7 @@ pub fn run_trial(
     let mut length = out.length;
     let end = trajectory.last().copied().unwrap_or(task.start);
     let (_, detections, aliased) = perception.counts();
+    let (ground_share, final_ground_share) = perception.ground_share();
     let result = if out.success {
         // drive to the centroid of the goal element in view (§4.4.2), looking for the goal
         // landmark itself on the way: reaching its element's frame is not enough to say
@@ -444,6 +470,8 @@ pub fn run_trial(
         final_distance: (fin[0] - task.goal_position[0]).hypot(fin[1] - task.goal_position[1]),
         detections,
         aliased,
+        ground_share,
+        final_ground_share,
         transit_length: out.transit_length,
         plan: out.plan.clone(),
         bounds,
