@@ -177,7 +177,7 @@ impl<'m> LidarPerception<'m> {
     }
 
     /// The share of the scans' rays that met the ground: over every scan, and over the last
-    /// [`RECENT_SCANS`].
+    /// `RECENT_SCANS`.
     #[must_use]
     pub fn ground_share(&self) -> (f64, f64) {
         self.state

@@ -87,7 +87,7 @@ pub struct FieldTrial {
     /// Share of the trial's lidar rays that met the ground (pitched terrain).
     #[serde(default)]
     pub ground_share: f64,
-    /// The same over its last scans ([`super::perception::RECENT_SCANS`]): where the robot
+    /// The same over its last scans (20, `RECENT_SCANS` of the perception): where the robot
     /// was looking when it arrived or gave up.
     #[serde(default)]
     pub final_ground_share: f64,
