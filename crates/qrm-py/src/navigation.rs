@@ -124,6 +124,8 @@ pub(crate) fn qlink_field(
                     "replans": t.replans, "length": t.length,
                     "final_distance": t.final_distance,
                     "transit_length": t.transit_length, "bounds": t.bounds,
+                    "ground_share": t.ground_share,
+                    "final_ground_share": t.final_ground_share,
                 })
             })
             .collect();
