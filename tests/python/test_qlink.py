@@ -75,9 +75,10 @@ def test_field_experiment_in_one_world():
         assert 0.0 <= v["success_rate"] <= 1.0
         assert v["trials"] == 3
     assert len(res["trials"]) == 4 * 3
+    # the JSON names, as qrm.types.FieldResult declares them (files write "+aliasing")
     assert {t["result"] for t in res["trials"]} <= {
         "success", "perceptual-aliasing", "insufficient-features",
-        "insufficient-features+aliasing", "no-path",
+        "insufficient-features-and-aliasing", "no-path",
     }
     # issue 18: both distance bounds per run, at the lidar's and the effective range
     for t in res["trials"]:
