@@ -1,15 +1,15 @@
 //! `qrm reason ...`: thin front end over `qsr_core::reason` (closure, scenarios).
 
 use std::io::Write as _;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result, bail};
 use pqrm::LandmarkSet;
 use pqrm::reason::{Fusion, InferOptions, InferenceReport, Inferrer};
 use qsr_core::Calculus;
 use qsr_core::binary::{
-    BinaryAlgebra, BinaryNetwork, SolveOptions, SolveOutcome, close_binary, from_gqr_csp_str,
-    solve_binary,
+    BinaryAlgebra, BinaryNetwork, SolveOptions, SolveOutcome, SplitSet, close_binary,
+    from_gqr_csp_str, solve_binary,
 };
 use qsr_core::reason::{
     Algebra, Network, ScenarioOptions, ScenarioOutcome, TableScope, close, find_scenario,
@@ -183,6 +183,16 @@ pub struct ScenarioArgs {
     /// The most search nodes before giving up (ternary: an error; binary: status "unknown").
     #[arg(long, default_value_t = ScenarioOptions::default().max_nodes)]
     pub max_nodes: usize,
+    /// Binary calculi: split constraints into the relations of this set rather than into
+    /// base relations — a file, or a name GQR's `-c NAME` finds (`horn`:
+    /// DATA/CALCULUS/calculus/hornalg beside the .spec, in $GQR_DATA_DIR or ./data). For a
+    /// tractable subclass (RCC-8's or Allen's Horn relations) the answer is consistency; a
+    /// solution then holds subclass relations, not base ones.
+    #[arg(long, visible_alias = "cover", value_name = "NAME|FILE")]
+    pub split: Option<String>,
+    /// Binary calculi: one depth-first search, without GQR's geometric restarts (GQR's --2w).
+    #[arg(long)]
+    pub no_restarts: bool,
 }
 
 /// Network file forms.
@@ -334,8 +344,24 @@ fn close_binary_networks(args: &NetworkArgs, algebra: &BinaryAlgebra) -> Result<
 
 /// `qrm reason scenario` over a binary calculus: consistency by search.
 fn solve_binary_networks(args: &ScenarioArgs, algebra: &BinaryAlgebra) -> Result<()> {
+    let split = match &args.split {
+        Some(name) => {
+            let spec_dir = Path::new(&args.network.calculus)
+                .extension()
+                .is_some_and(|e| e.eq_ignore_ascii_case("spec"))
+                .then(|| Path::new(&args.network.calculus).parent())
+                .flatten();
+            Some(
+                SplitSet::resolve(algebra, name, spec_dir)
+                    .with_context(|| format!("loading the split set `{name}`"))?,
+            )
+        }
+        None => None,
+    };
     let options = SolveOptions {
         max_nodes: args.max_nodes as u64,
+        split,
+        restarts: !args.no_restarts,
     };
     for (name, network) in binary_networks(&args.network, algebra)? {
         let solved = solve_binary(network, &options)?;
@@ -437,6 +463,12 @@ pub fn run(cmd: ReasonCmd) -> Result<()> {
             print_network(closed.is_consistent(), Some(&closed.network))
         }
         ReasonCmd::Scenario(args) => {
+            if args.split.is_some() || args.no_restarts {
+                bail!(
+                    "--split and --no-restarts are for binary calculi; `{}` is ternary",
+                    args.network.calculus
+                );
+            }
             let (network, algebra) = load(&args.network)?;
             let options = ScenarioOptions {
                 max_nodes: args.max_nodes,

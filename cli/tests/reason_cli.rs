@@ -517,6 +517,53 @@ fn a_gqr_user_runs_their_calculus_and_csp_files_unchanged() {
             .contains("\"status\":\"unknown\""),
         "{out}"
     );
+    // GQR's `-c convex`: the split set `point/calculus/convexalg` beside the spec; a
+    // constraint already convex (`1 2 ( < = )`) is not split.
+    std::fs::write(
+        dir.join("point/calculus/convexalg"),
+        "# the convex point relations\n( < )\n( = )\n( > )\n( < = )\n( = > )\n( < = > )\n",
+    )
+    .unwrap();
+    let split = |name: &str| {
+        json_lines(&[
+            "reason",
+            "scenario",
+            "--calculus",
+            spec.to_str().unwrap(),
+            "--split",
+            name,
+            "--input",
+            csp.to_str().unwrap(),
+        ])
+    };
+    let lines = split("convex");
+    assert_eq!(lines[0]["status"], "consistent");
+    assert_eq!(
+        lines[0]["constraints"][2],
+        serde_json::json!(["1", "2", ["<", "="]])
+    );
+    assert_eq!(lines[1]["status"], "inconsistent");
+    let by_path = dir.join("point/calculus/convexalg");
+    assert_eq!(split(by_path.to_str().unwrap()), lines);
+    let e = qrm(
+        &[
+            "reason",
+            "scenario",
+            "--calculus",
+            spec.to_str().unwrap(),
+            "--split",
+            "horn",
+            "--input",
+            csp.to_str().unwrap(),
+        ],
+        "",
+    );
+    assert!(!e.status.success());
+    let stderr = String::from_utf8_lossy(&e.stderr);
+    assert!(
+        stderr.contains("split set `horn`") && stderr.contains("hornalg"),
+        "{stderr}"
+    );
     // The laws of its tables.
     let laws = run(&["reason", "laws", "--calculus", spec.to_str().unwrap()]);
     assert!(

@@ -109,6 +109,29 @@ def test_algebra_from_gqr_closes_solves_and_reads_csp(tmp_path):
     assert again.labels == pa.labels and again.to_gqr_tables() == pa.to_gqr_tables()
 
 
+def test_consistency_splits_into_a_tractable_subclass_given_as_sets_or_gqrs_file(tmp_path):
+    pa = qrm.reason.Algebra.from_gqr(_gqr_point_dir(tmp_path))
+    convex = [["<"], ["="], [">"], ["<", "="], ["=", ">"], ["<", "=", ">"]]
+    net = [("a", "b", ["<", ">"]), ("b", "c", ["<", "="])]
+    s = qrm.reason.consistency(pa, net, split=convex)
+    # `≠` is not convex: split into `<`; `≤` is, and stays as it is.
+    assert s.status == "consistent"
+    assert s.constraints == {("a", "b"): ["<"], ("a", "c"): ["<"], ("b", "c"): ["<", "="]}
+    assert qrm.reason.consistency(pa, net).constraints[("b", "c")] in (["<"], ["="])
+    # GQR's cover-set file (what `gqr consistency -c convex` would read), and without restarts.
+    cover = tmp_path / "point" / "calculus" / "convexalg"
+    cover.write_text("".join(f"( {' '.join(m)} )\n" for m in convex))
+    t = qrm.reason.consistency(pa, net, split=cover, restarts=False)
+    assert t.constraints == s.constraints
+    cyc = [("a", "b", ["<"]), ("b", "c", ["<"]), ("c", "a", ["<", ">"])]
+    assert qrm.reason.consistency(pa, cyc, split=convex).status == "consistent"
+    assert qrm.reason.consistency(pa, cyc + [("c", "a", ["<"])], split=convex).status == "inconsistent"
+    with pytest.raises(qrm.SpecError, match="base relation `=` is not a member on its own"):
+        qrm.reason.consistency(pa, net, split=[["<"], [">"]])
+    with pytest.raises(qrm.SpecError, match="line 1.*no relation `lt`"):
+        qrm.reason.consistency(pa, net, split=[["lt"]])
+
+
 def test_algebra_errors_are_typed_and_name_the_place(tmp_path):
     spec = _gqr_point_dir(tmp_path)
     (tmp_path / "point" / "calculus" / "point.comp").write_text(POINT_COMP.replace("( = )", "( == )"))

@@ -11,8 +11,8 @@ use std::path::Path;
 
 use pqrm::loaders::{RangeBearingNoise, parse_csv, parse_g2o, parse_truth_csv, read_mrclam};
 use qsr_core::binary::{
-    BinaryAlgebra, BinaryCalculus, BinaryNetwork, SolveOptions, close_binary, from_gqr_csp_str,
-    solve_binary,
+    BinaryAlgebra, BinaryCalculus, BinaryNetwork, SolveOptions, SplitSet, close_binary,
+    from_gqr_csp_str, solve_binary,
 };
 use qsr_core::reason::{Algebra, Network, TableScope, close};
 use qsr_core::{Calculus, Point2};
@@ -322,7 +322,14 @@ pub fn binary_network(data: &[u8]) {
     for net in parsed.unwrap_or_default() {
         if net.n_points() <= CLOSE_POINTS {
             let _ = close_binary(net.clone());
-            let _ = solve_binary(net, &SolveOptions { max_nodes: 200 });
+            for restarts in [true, false] {
+                let options = SolveOptions {
+                    max_nodes: 200,
+                    restarts,
+                    ..SolveOptions::default()
+                };
+                let _ = solve_binary(net.clone(), &options);
+            }
         }
     }
 }
@@ -351,7 +358,14 @@ pub fn calculus_tables(data: &[u8]) {
     let first = qsr_core::reason::StateSet::from_states(alg.n_states(), alg.states().take(1));
     net.constrain(0, 1, &first);
     let _ = close_binary(net.clone());
-    let _ = solve_binary(net, &SolveOptions { max_nodes: 200 });
+    // The same text read as a split set (GQR's cover-set format); one that loads is searched with.
+    let split = SplitSet::from_gqr_str(&alg, t, "fuzz").ok();
+    let options = SolveOptions {
+        max_nodes: 200,
+        split,
+        restarts: true,
+    };
+    let _ = solve_binary(net, &options);
 }
 
 /// A study config file (`qrm study run NAME --config FILE`): its fields laid over every

@@ -282,20 +282,44 @@ fn algebra_of(calculus: &Bound<'_, PyAny>) -> PyResult<qsr_core::binary::BinaryA
 }
 
 /// Consistency of a binary network by search (GQR's `consistency`); returns JSON
-/// `{"status": "consistent" | "inconsistent" | "unknown", "constraints", "nodes"}`.
+/// `{"status": "consistent" | "inconsistent" | "unknown", "constraints", "nodes"}`. The split
+/// set is a GQR cover-set file (`split_path`) or its members as label lists (`split_sets`).
 #[pyfunction]
-#[pyo3(signature = (calculus, constraints, *, max_nodes = 1_000_000))]
+#[pyo3(signature = (calculus, constraints, *, max_nodes = 1_000_000, split_path = None, split_sets = None, restarts = true))]
 pub(crate) fn reason_solve_binary(
     py: Python<'_>,
     calculus: &Bound<'_, PyAny>,
     constraints: Vec<(String, String, Vec<String>)>,
     max_nodes: u64,
+    split_path: Option<std::path::PathBuf>,
+    split_sets: Option<Vec<Vec<String>>>,
+    restarts: bool,
 ) -> PyResult<String> {
-    use qsr_core::binary::{SolveOptions, SolveOutcome, solve_binary};
+    use qsr_core::binary::{SolveOptions, SolveOutcome, SplitSet, solve_binary};
     let a = algebra_of(calculus)?;
     let net = BinaryNetwork::from_constraints(&a, &constraints).map_err(qsr)?;
-    let solved =
-        crate::pool::detach(py, || solve_binary(net, &SolveOptions { max_nodes })).map_err(qsr)?;
+    let split = match (split_path, split_sets) {
+        (Some(path), None) => Some(SplitSet::from_gqr_file(&a, &path).map_err(qsr)?),
+        (None, Some(sets)) => {
+            let text: String = sets
+                .iter()
+                .map(|m| format!("( {} )\n", m.join(" ")))
+                .collect();
+            Some(SplitSet::from_gqr_str(&a, &text, "split").map_err(qsr)?)
+        }
+        (None, None) => None,
+        (Some(_), Some(_)) => {
+            return Err(pyo3::exceptions::PyValueError::new_err(
+                "give the split set as a file or as sets, not both",
+            ));
+        }
+    };
+    let options = SolveOptions {
+        max_nodes,
+        split,
+        restarts,
+    };
+    let solved = crate::pool::detach(py, || solve_binary(net, &options)).map_err(qsr)?;
     let (status, constraints) = match &solved.outcome {
         SolveOutcome::Consistent(s) => ("consistent", Some(s.constraints_json())),
         SolveOutcome::Inconsistent => ("inconsistent", None),

@@ -16,8 +16,9 @@ calculus files (GQR's ``.spec``) and the same ``.csp`` files. For every network 
 the verdicts agree and, for path consistency, that the closed networks are equal relation for
 relation (consistency: the verdicts agree, and each solution qrm prints is atomic and refines
 the input's constraints; that closure leaves a solution unchanged is checked by the reasoner's
-own tests). qrm's search runs out of nodes on some hard networks that GQR decides by splitting
-into a tractable subclass; those are counted as "unknown", apart from disagreements. Each reasoner is timed as a whole process (CPU = user +
+own tests; with ``--split horn`` each set must be a member of the cover set, GQR's ``-c horn``).
+A network qrm's search leaves undecided within ``--max-nodes`` is counted as "unknown", apart
+from disagreements. Each reasoner is timed as a whole process (CPU = user +
 system of the child, and wall clock), the two interleaved, best of ``--rounds``. The table
 gives, per class, the median CPU time of each and their ratio (qrm ÷ GQR: below 1, qrm is
 faster).
@@ -209,6 +210,10 @@ def compare(args, gqr, qrm, data, env, csp: Path, calculus: str, universal) -> t
              "--input", str(csp), "--output", "gqr"]
     if args.mode == "consistency":
         q_cmd += ["--max-nodes", str(args.max_nodes)]  # the default: 10^6 search nodes
+        if split_members(data, calculus, args.split) is not None:
+            # GQR's -c NAME reads DATA/CALCULUS/calculus/NAMEalg; qrm's --split finds the same.
+            g_cmd[3:3] = ["-c", args.split]
+            q_cmd += ["--split", args.split]
     g_best, q_best = [float("inf")] * 2, [float("inf")] * 2
     g_out = q_out = ""
     for _ in range(args.rounds):
@@ -237,11 +242,25 @@ def compare(args, gqr, qrm, data, env, csp: Path, calculus: str, universal) -> t
         if args.mode == "path-consistency" and g_ok and q_ok:
             agree &= same_network(g_net, q_net, universal)
         if args.mode == "consistency" and q_ok:
-            # A solution is atomic and refines what the input says of every pair i < j.
+            # A solution's every set is a split (atomic without --split) and refines what the
+            # input says of every pair i < j.
             given = inputs[k] if k < len(inputs) else {}
-            agree &= all(len(rels) == 1 for rels in q_net.values())
+            members = split_members(data, calculus, args.split)
+            if members is None:
+                agree &= all(len(rels) == 1 for rels in q_net.values())
+            else:
+                agree &= all(rels in members for rels in q_net.values())
             agree &= all(q_net.get(key, universal) <= rels for key, rels in given.items())
     return g_best, q_best, agree, [ok for ok, _ in g_res], unknown
+
+
+def split_members(data: Path, calculus: str, split: str | None) -> set[frozenset[str]] | None:
+    """The members of GQR's cover set `split` (`DATA/CALCULUS/calculus/SPLITalg`), or None."""
+    path = data / calculus / "calculus" / f"{split}alg"
+    if not split or not path.is_file():
+        return None  # no such cover set for this calculus: base relations
+    text = (data / calculus / "calculus" / f"{split}alg").read_text(encoding="latin-1")
+    return {frozenset(m.group(1).split()) for m in re.finditer(r"\(([^)]*)\)", text)}
 
 
 def main() -> int:
@@ -256,6 +275,7 @@ def main() -> int:
     ap.add_argument("--networks", type=int, default=10, help="networks per class")
     ap.add_argument("--rounds", type=int, default=3, help="interleaved timing rounds (best of)")
     ap.add_argument("--max-nodes", type=int, default=1_000_000)
+    ap.add_argument("--split", help="consistency: split into this cover set (GQR's -c, e.g. horn)")
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--quick", action="store_true", help="3 networks per class, sizes 50,100")
     ap.add_argument("--no-examples", action="store_true", help="skip GQR's example networks")

@@ -13,7 +13,7 @@ use std::fmt::Write as _;
 use proptest::prelude::*;
 use qsr_core::QsrError;
 use qsr_core::binary::{
-    AlgebraLaw, BinaryAlgebra, BinaryCalculus, BinaryNetwork, SolveOptions, SolveOutcome,
+    AlgebraLaw, BinaryAlgebra, BinaryCalculus, BinaryNetwork, SolveOptions, SolveOutcome, SplitSet,
     close_binary, from_gqr_csp_str, solve_binary,
 };
 use qsr_core::reason::StateSet;
@@ -524,12 +524,183 @@ fn search_finds_a_scenario_exactly_when_one_exists_and_says_unknown_past_its_bud
     assert!(found >= 5 && none >= 5, "{found} / {none}");
     // A budget of one node cannot decide a network that needs a choice.
     let net = random_network(&alg, 30, 6.0, 6.5, 7);
-    let solved = solve_binary(net, &SolveOptions { max_nodes: 1 }).unwrap();
+    let solved = solve_binary(
+        net,
+        &SolveOptions {
+            max_nodes: 1,
+            ..SolveOptions::default()
+        },
+    )
+    .unwrap();
     assert!(
         matches!(solved.outcome, SolveOutcome::Unknown),
         "{:?}",
         solved.nodes
     );
+}
+
+/// The point algebra's convex relations: path consistency decides networks over them (all
+/// but `≠`, `{<, >}`), so they are a split set for which search is consistency.
+const POINT_CONVEX: &str = "# convex\n( < )\n( = )\n( > )\n( < = )\n( = > )\n( < = > )\n";
+
+/// Checks a search's answer against brute force: a solution refines the input, every set is a
+/// split (`members`, or atomic), and closure leaves it as it is.
+fn check_solution(
+    net: &BinaryNetwork,
+    outcome: &SolveOutcome,
+    exists: bool,
+    members: Option<&[StateSet]>,
+    what: &str,
+) -> bool {
+    match outcome {
+        SolveOutcome::Consistent(s) => {
+            assert!(exists, "{what}: a solution reported where none exists");
+            for (i, j) in s.pairs() {
+                let set = s.get(i, j);
+                assert!(net.get(i, j).is_superset(&set), "{what}: refines the input");
+                match members {
+                    Some(m) => assert!(m.contains(&set), "{what}: {i}-{j} is not a split"),
+                    None => assert_eq!(set.len(), 1, "{what}: atomic"),
+                }
+            }
+            let closed = close_binary(s.clone()).unwrap();
+            assert!(
+                closed.is_consistent() && &closed.network == s,
+                "{what}: closed"
+            );
+            !s.is_atomic()
+        }
+        SolveOutcome::Inconsistent => {
+            assert!(!exists, "{what}: a solution exists");
+            false
+        }
+        SolveOutcome::Unknown => panic!("{what}: the default budget suffices"),
+    }
+}
+
+#[test]
+fn search_split_into_a_tractable_subclass_decides_as_brute_force_with_and_without_restarts() {
+    let pa = point_algebra();
+    let convex = SplitSet::from_gqr_str(&pa, POINT_CONVEX, "pa-convex").unwrap();
+    assert_eq!(convex.len(), 6);
+    let (mut found, mut none, mut stopped_early) = (0, 0, 0);
+    for seed in 0..80 {
+        // Dense, with labels of about half the relations: many `≠` and `≤` constraints.
+        let net = random_network(&pa, 7, 4.0, 1.6, 300 + seed);
+        let exists = brute_force_consistent(&net);
+        for restarts in [true, false] {
+            for split in [None, Some(&convex)] {
+                let options = SolveOptions {
+                    split: split.cloned(),
+                    restarts,
+                    ..SolveOptions::default()
+                };
+                let solved = solve_binary(net.clone(), &options).unwrap();
+                let what = format!(
+                    "seed {seed}, restarts {restarts}, split {}",
+                    split.is_some()
+                );
+                let members = split.map(SplitSet::members);
+                stopped_early += usize::from(check_solution(
+                    &net,
+                    &solved.outcome,
+                    exists,
+                    members,
+                    &what,
+                ));
+            }
+        }
+        if exists {
+            found += 1;
+        } else {
+            none += 1;
+        }
+    }
+    assert!(found >= 10 && none >= 10, "{found} consistent / {none} not");
+    // The split search stops at convex sets: some solutions are not atomic.
+    assert!(stopped_early >= 10, "{stopped_early} non-atomic solutions");
+}
+
+#[test]
+fn search_with_restarts_and_without_agree_on_allen_networks_around_the_transition() {
+    let alg = allen_algebra();
+    let (mut yes, mut no, mut restarted) = (0, 0, 0);
+    for seed in 0..24 {
+        let net = random_network(&alg, 30, 8.5, 6.5, 900 + seed);
+        let with = solve_binary(net.clone(), &SolveOptions::default()).unwrap();
+        let without = solve_binary(
+            net.clone(),
+            &SolveOptions {
+                restarts: false,
+                ..SolveOptions::default()
+            },
+        )
+        .unwrap();
+        let verdict = |o: &SolveOutcome| match o {
+            SolveOutcome::Consistent(s) => {
+                assert!(s.is_atomic());
+                for (i, j) in s.pairs() {
+                    assert!(net.get(i, j).is_superset(&s.get(i, j)));
+                }
+                Some(true)
+            }
+            SolveOutcome::Inconsistent => Some(false),
+            SolveOutcome::Unknown => None,
+        };
+        let v = verdict(&with.outcome);
+        assert_eq!(v, verdict(&without.outcome), "seed {seed}");
+        match v {
+            Some(true) => yes += 1,
+            Some(false) => no += 1,
+            None => panic!("seed {seed}: undecided within the default budget"),
+        }
+        restarted += usize::from(with.restarts > 0);
+        assert_eq!(without.restarts, 0);
+    }
+    assert!(yes >= 3 && no >= 3, "{yes} consistent / {no} not");
+    assert!(
+        restarted >= 1,
+        "no network needed a restart: the test does not exercise them"
+    );
+}
+
+#[test]
+fn split_sets_load_as_gqr_finds_them_and_bad_ones_name_the_line_and_relation() {
+    let pa = point_algebra();
+    let err = |text: &str| {
+        SplitSet::from_gqr_str(&pa, text, "my.alg")
+            .unwrap_err()
+            .to_string()
+    };
+    let e = err("( < )\n( = )\n( > )\n< =\n");
+    assert!(
+        e.contains("my.alg") && e.contains("line 4") && e.contains("< ="),
+        "{e}"
+    );
+    let e = err("( < )\n( = )\n( > )\n( < lt )\n");
+    assert!(e.contains("line 4") && e.contains("`lt`"), "{e}");
+    let e = err("( < )\n( > )\n( < = )\n");
+    assert!(
+        e.contains("`=`") && e.contains("not a member on its own"),
+        "{e}"
+    );
+    let e = err("( < )\n( = )\n( > ) x\n");
+    assert!(e.contains("line 3"), "{e}");
+    // GQR's -c NAME: DIR/CALCULUS/calculus/NAMEalg beside the .spec.
+    let dir = std::env::temp_dir().join(format!("qrm-split-{}", std::process::id()));
+    let at = dir.join("point").join("calculus");
+    std::fs::create_dir_all(&at).unwrap();
+    std::fs::write(at.join("convexalg"), POINT_CONVEX).unwrap();
+    let found = SplitSet::resolve(&pa, "convex", Some(&dir)).unwrap();
+    assert_eq!(found.len(), 6);
+    assert!(found.origin().ends_with("convexalg"));
+    let by_path = SplitSet::resolve(&pa, &at.join("convexalg").display().to_string(), None);
+    assert_eq!(by_path.unwrap().members(), found.members());
+    let e = SplitSet::resolve(&pa, "horn", Some(&dir))
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("hornalg") && e.contains("no such file"), "{e}");
+    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 #[test]

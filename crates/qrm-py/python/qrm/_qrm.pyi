@@ -91,6 +91,9 @@ def reason_solve_binary(
     constraints: List[Tuple[str, str, List[str]]],
     *,
     max_nodes: int = 1000000,
+    split_path: Optional[str] = None,
+    split_sets: Optional[List[List[str]]] = None,
+    restarts: bool = True,
 ) -> str: ...
 def reason_read_csp(calculus: Union[BinaryCalculus, BinaryAlgebra], text: str) -> str: ...
 def worker_threads() -> int:

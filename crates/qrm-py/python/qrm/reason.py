@@ -37,6 +37,7 @@ Probabilistic reasoning over maps lives on the map: ``Pqrm.infer`` and ``Pqrm.ch
 from __future__ import annotations
 
 import json
+import os
 from dataclasses import dataclass
 from typing import Dict, Iterable, List, Optional, Sequence, Tuple, Union
 
@@ -180,11 +181,34 @@ def consistency(
     constraints: Iterable[Tuple[str, str, Sequence[str]]],
     *,
     max_nodes: int = 1_000_000,
+    split: Union[str, "os.PathLike[str]", Sequence[Sequence[str]], None] = None,
+    restarts: bool = True,
 ) -> BinarySolution:
     """Consistency by backtracking search with path consistency at every node (GQR's
-    ``consistency``): an atomic path-consistent refinement, none, or ``"unknown"``."""
+    ``consistency``): a path-consistent refinement whose every constraint is a split, none,
+    or ``"unknown"`` when ``max_nodes`` decisions did not decide it.
+
+    ``split``: the relations to split constraints into — a GQR cover-set file (such as
+    ``data/rcc8/calculus/hornalg``, GQR's ``-c horn``) or its members as label lists; by
+    default base relations, and a solution is atomic. ``restarts=False`` is GQR's ``--2w``."""
     rows = [(str(a), str(b), [str(x) for x in labels]) for a, b, labels in constraints]
-    out = json.loads(_qrm.reason_solve_binary(calculus, rows, max_nodes=max_nodes))
+    if split is None:
+        out = json.loads(
+            _qrm.reason_solve_binary(calculus, rows, max_nodes=max_nodes, restarts=restarts)
+        )
+    elif isinstance(split, (str, os.PathLike)):
+        out = json.loads(
+            _qrm.reason_solve_binary(
+                calculus, rows, max_nodes=max_nodes, split_path=os.fspath(split), restarts=restarts
+            )
+        )
+    else:
+        sets = [[str(x) for x in member] for member in split]
+        out = json.loads(
+            _qrm.reason_solve_binary(
+                calculus, rows, max_nodes=max_nodes, split_sets=sets, restarts=restarts
+            )
+        )
     return BinarySolution(str(out["status"]), _pairs(out["constraints"]), int(out["nodes"]))
 
 

@@ -37,7 +37,8 @@
 //! - [`BinaryNetwork`]: a network over an algebra, in SparQ's text, JSON or GQR's `.csp`
 //!   ([`from_gqr_csp_str`], [`BinaryNetwork::to_gqr_csp`]).
 //! - [`close_binary`]: path consistency (PC-2 over block tables of set composition);
-//!   [`solve_binary`]: consistency by search, with a node budget.
+//!   [`solve_binary`]: consistency by search, with a node budget, splitting into base
+//!   relations or a [`SplitSet`] (a tractable subclass, GQR's cover sets).
 //! - [`render_binary_svg`]: a picture of the partition of directions.
 //!
 //! ## Naming rule
@@ -59,6 +60,7 @@ mod network;
 mod picture;
 mod relations;
 pub(crate) mod set_ops;
+mod split_set;
 mod table_files;
 
 pub use algebra::{AsBinaryAlgebra, BinaryAlgebra, MAX_LOADED_RELATIONS};
@@ -76,4 +78,5 @@ pub use derive::ConverseTable;
 pub use direction::{DirectionPartition, RAY_TOLERANCE, TICKS_PER_UNIT};
 pub use network::{BinaryNetwork, MAX_BINARY_POINTS, relation_set};
 pub use picture::render_binary_svg;
+pub use split_set::SplitSet;
 pub use table_files::GqrTables;

@@ -628,35 +628,21 @@ fn compositions_one_word(
     let mut proposals = Vec::new();
     let (mut left_buf, mut right_buf) = (Vec::new(), Vec::new());
     let single = |x: u64| crate::binary::set_ops::single(&[x]);
-    // The composition when it refines `target`: two single states by the base table (a
-    // scenario's every instance); the triplet's own set fixed by its block entries, one lookup
-    // per block of the other input; otherwise the blocks of both.
-    let refining = |entries: Option<&[[u64; 1]]>,
-                    given_single: Option<usize>,
-                    other: u64,
-                    fixed: u64,
-                    fixed_left: bool,
-                    target: u64| {
-        let acc = match (given_single.zip(single(other)), entries) {
-            (Some((g, o)), _) if fixed_left => view.base_at(g, o)[0],
-            (Some((g, o)), _) => view.base_at(o, g)[0],
-            (None, Some(e)) => view.through(e, &[other])[0],
-            (None, None) if fixed_left => {
-                return view
-                    .composition_refining(&[fixed], &[other], &[target])
-                    .map(|o| o[0]);
-            }
-            (None, None) => {
-                return view
-                    .composition_refining(&[other], &[fixed], &[target])
-                    .map(|o| o[0]);
-            }
-        };
-        (target & !acc != 0).then_some(acc)
-    };
+    // A universal set of the triplet's refines nothing as either input when `U` absorbs
+    // (EDC's tables: `U ∘ s = s ∘ U = U`): half of a half-known network's rule instances.
+    let universal = view.universal[0];
+    let (absorbs_left, absorbs_right) = (
+        view.universal_absorbs_from_left(),
+        view.universal_absorbs_from_right(),
+    );
     for (p, q, r) in processing_order(a, b, c) {
         let pqr = net.index(p, q, r);
         let given = sets[pqr];
+        let left_rule = !(given == universal && absorbs_left);
+        let right_rule = both && !(given == universal && absorbs_right);
+        if !left_rule && !right_rule {
+            continue;
+        }
         // Index strides: {p,q:w} = pq + w, {q,r:w} = qr + w, {w,p:r} = w·n² + pr,
         // {w,p:q} = w·n² + pq'.
         let (pq, qr) = (net.index(p, q, 0), net.index(q, r, 0));
@@ -664,8 +650,12 @@ fn compositions_one_word(
         let nn = n * n;
         let (targets, rights) = (&sets[pq..pq + n], &sets[qr..qr + n]);
         let given_single = single(given);
-        let row = view.fixed_left(&[given], &mut left_buf);
-        let col = if both {
+        let row = if left_rule {
+            view.fixed_left(&[given], &mut left_buf)
+        } else {
+            None
+        };
+        let col = if right_rule {
             view.fixed_right(&[given], FIXED_RIGHT_MAX, &mut right_buf)
         } else {
             None
@@ -675,7 +665,10 @@ fn compositions_one_word(
                 continue;
             }
             // {p,q:w} ⊆ {p,q:r} ∘ {q,r:w}
-            if let Some(acc) = refining(row, given_single, rights[w], given, true, targets[w]) {
+            if left_rule
+                && let Some(acc) =
+                    refining_one_word(view, row, given_single, rights[w], given, true, targets[w])
+            {
                 proposals.push(Proposal {
                     target: (pq + w) as u32,
                     left: pqr as u32,
@@ -683,7 +676,7 @@ fn compositions_one_word(
                     allowed: Allowed::One([acc]),
                 });
             }
-            if !both {
+            if !right_rule {
                 continue;
             }
             // {w,p:r} ⊆ {w,p:q} ∘ {p,q:r}
@@ -692,7 +685,9 @@ fn compositions_one_word(
                 Some(t) => (t[wpq * n + w], t[wpr * n + w]),
                 None => (sets[left], sets[target]),
             };
-            if let Some(acc) = refining(col, given_single, left_set, given, false, target_set) {
+            if let Some(acc) =
+                refining_one_word(view, col, given_single, left_set, given, false, target_set)
+            {
                 proposals.push(Proposal {
                     target: target as u32,
                     left: left as u32,
@@ -703,6 +698,42 @@ fn compositions_one_word(
         }
     }
     proposals
+}
+
+/// The composition of one rule instance when it refines `target` (see
+/// [`compositions_one_word`]): two single states by the base table (a scenario's every
+/// instance); the triplet's own set `fixed` by its block entries (`entries`), one lookup per
+/// block of the other input; otherwise the blocks of both. Always inlined: it is the body of
+/// the innermost loop, and a call per instance cost a third of ternary closure.
+#[inline(always)]
+fn refining_one_word(
+    view: &SetView<'_, 1>,
+    entries: Option<&[[u64; 1]]>,
+    given_single: Option<usize>,
+    other: u64,
+    fixed: u64,
+    fixed_left: bool,
+    target: u64,
+) -> Option<u64> {
+    let acc = match (
+        given_single.zip(crate::binary::set_ops::single(&[other])),
+        entries,
+    ) {
+        (Some((g, o)), _) if fixed_left => view.base_at(g, o)[0],
+        (Some((g, o)), _) => view.base_at(o, g)[0],
+        (None, Some(e)) => view.through(e, &[other])[0],
+        (None, None) if fixed_left => {
+            return view
+                .composition_refining(&[fixed], &[other], &[target])
+                .map(|o| o[0]);
+        }
+        (None, None) => {
+            return view
+                .composition_refining(&[other], &[fixed], &[target])
+                .map(|o| o[0]);
+        }
+    };
+    (target & !acc != 0).then_some(acc)
 }
 
 /// The flat indices of the six orderings of the triplet with canonical index `canon`.
