@@ -442,14 +442,8 @@ impl<const W: usize> SetView<'_, W> {
         self.left_total == self.universal
     }
 
-    /// `r ∘ s` of two base relations.
-    #[inline(always)]
-    pub(crate) fn base_at(&self, r: usize, s: usize) -> [u64; W] {
-        self.base[r * self.n_states + s]
-    }
-
     /// With few blocks, the block table's entries for the left set `left` fixed: `left ∘ X`
-    /// for any set `X` is the union of one entry per block of `X` ([`Self::through`]). A set
+    /// for any set `X` is the union of one entry per block of `X` ([`Self::through_word`]). A set
     /// within one block (every single relation) is a slice of the block table; one spanning
     /// blocks is the union of theirs, written to `buf` (at most [`DENSE_BLOCKS`] slices).
     /// `None` with many blocks.
@@ -483,7 +477,7 @@ impl<const W: usize> SetView<'_, W> {
     }
 
     /// As [`Self::fixed_left`] for the right set `right` fixed (`X ∘ right` through
-    /// [`Self::through`]): the union of its relations' gathered entries, when it has at most
+    /// [`Self::through_word`]): the union of its relations' gathered entries, when it has at most
     /// `max_relations` (each costs a pass over the entries); `None` otherwise.
     pub(crate) fn fixed_right<'b>(
         &'b self,
@@ -515,22 +509,39 @@ impl<const W: usize> SetView<'_, W> {
         Some(buf)
     }
 
-    /// The composition of `set` with the single relation whose entries `entries` are (from
-    /// [`Self::fixed_left`] or [`Self::fixed_right`]): one lookup per block, no branch.
+    /// Blocks per set.
+    pub(crate) fn n_blocks(&self) -> usize {
+        self.n_blocks
+    }
+
+    /// Bits per block.
+    pub(crate) fn block(&self) -> usize {
+        self.block
+    }
+
+    /// The composition of a one-word set with the single relation whose gathered entries
+    /// `entries` are (from [`Self::fixed_left`] or [`Self::fixed_right`]): one lookup per block,
+    /// no branch. The block count `NB` is known at compile time, and the block width `B` too
+    /// when it is not 0 (then the shifts and table offsets are constants, and a caller that
+    /// checked `entries.len() >= NB << B` has no bounds check left): the loops of ternary
+    /// closure are instantiated per layout, so a row of the network is a straight pass.
     #[inline(always)]
-    pub(crate) fn through(&self, entries: &[[u64; W]], set: &[u64; W]) -> [u64; W] {
-        let look = |k: usize| {
-            let bit = k * self.block;
-            let v = ((set[bit / 64] >> (bit % 64)) & self.mask) as usize;
-            &entries[k * self.v_count + v]
-        };
-        // Unrolled: the entries exist only for at most DENSE_BLOCKS blocks, and this is the
-        // innermost loop of ternary closure (a loop over a run-time block count cost a fifth).
-        match self.n_blocks {
-            1 => *look(0),
-            2 => or(look(0), look(1)),
-            _ => or(&or(look(0), look(1)), look(2)),
+    pub(crate) fn through_word<const NB: usize, const B: usize>(
+        &self,
+        entries: &[[u64; W]],
+        set: u64,
+    ) -> u64 {
+        let mut acc = 0;
+        for k in 0..NB {
+            let v = if B == 0 {
+                ((set >> (k * self.block)) & self.mask) as usize
+            } else {
+                ((set >> (k * B)) & ((1 << B) - 1)) as usize
+            };
+            let at = if B == 0 { k * self.v_count } else { k << B };
+            acc |= entries[at + v][0];
         }
+        acc
     }
 
     /// The weight of a set: the sum of its relations' weights (GQR's queue key).

@@ -198,6 +198,26 @@ impl Algebra {
         self.words
     }
 
+    /// The universal set's words.
+    pub(crate) fn universal_words(&self) -> &[u64] {
+        &self.universal
+    }
+
+    /// `permute(op, set)` of a one-word set (`words() == 1`).
+    #[inline]
+    pub(crate) fn permute_word(&self, op: Permutation, set: u64) -> u64 {
+        let table = &self.permute[op as usize];
+        let (mut rest, mut out) = (set, 0);
+        while rest != 0 {
+            out |= table
+                .get(rest.trailing_zeros() as usize)
+                .copied()
+                .unwrap_or(0);
+            rest &= rest - 1;
+        }
+        out
+    }
+
     /// `out = permute(op, set)`.
     pub(crate) fn permute_into(&self, op: Permutation, set: &[u64], out: &mut [u64]) {
         out.fill(0);

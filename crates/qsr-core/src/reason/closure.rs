@@ -10,10 +10,16 @@
 //! permutation tables, then re-runs every composition rule in which one of its orderings is an
 //! input: with `(p, q, r)` an ordering and `w` any fourth point, `{p,q:w} ⊆ {p,q:r} ∘ {q,r:w}`
 //! and `{w,p:r} ⊆ {w,p:q} ∘ {p,q:r}`. Each rule is run again only when one of its inputs
-//! changed (AC-3 style), so the fixpoint is reached with each refinement done once.
+//! changed (AC-3 style), so the fixpoint is reached with each refinement done once; a triplet
+//! that changes while it is still to be processed in the current round is not queued again.
 //!
-//! Queued triplets are processed in rounds: the compositions of one round are evaluated in
-//! parallel against the network as it stands, then applied in triplet order. The closed
+//! Queued triplets are processed in rounds, in fixed-size chunks: the permutations and then the
+//! compositions of a chunk are evaluated in parallel against the network as it stands, then
+//! applied in queue order. The first round of a full closure takes the triplets something is
+//! known of first, with the left-input rule only (every rule instance has one such input),
+//! and then the triplets nothing is known of, with both rules: by the time these run, the
+//! compositions of the known ones have inferred most of what they will hold, so a half-known
+//! network closes in about one pass over its rule instances rather than two. The closed
 //! network (the greatest fixpoint of the rules) is unique, and the order of application is
 //! fixed, so the result, the point of a contradiction and its explanation do not depend on the
 //! thread count.
@@ -352,6 +358,12 @@ const CHUNK: usize = 512;
 /// A refinement proposed by one triplet's compositions: `target ∩= allowed`.
 struct Proposal {
     target: u32,
+    /// The target's index in [`Propagation::transposed`] (computed with the proposal: the
+    /// applying loop would divide by `n` twice per refinement).
+    transposed: u32,
+    /// The canonical index of the target's unordered triplet (the one to queue), computed
+    /// with the proposal rather than by the applying loop, which runs on one thread.
+    canon: u32,
     left: u32,
     right: u32,
     allowed: Allowed,
@@ -408,64 +420,96 @@ impl Propagation {
                 }
             }
         }
-        let mut queued = vec![false; n * n * n];
+        frontier.sort_unstable();
+        frontier.dedup();
+        let full = frontier.len() == n * n.saturating_sub(1) * n.saturating_sub(2) / 6;
         // Every composition rule instance `{a,b:d} ⊆ {a,b:c} ∘ {b,c:d}` has a left input, so
-        // a first round over every triplet evaluates each instance once from its left input
+        // the first round of a full closure evaluates each instance from its left input
         // (rule 1 below) and skips the right-input copies (rule 2), which read the network a
-        // column at a time. A triplet whose sets change after an instance read them is queued,
-        // and later rounds run both rules, as does a triplet its own permutations refined.
-        let mut left_only = frontier.len() == n * n.saturating_sub(1) * n.saturating_sub(2) / 6;
-        if left_only && alg.one_word().is_some() && n <= MAX_TRANSPOSED_POINTS {
-            let sets = net.one_word_sets();
-            let mut t = vec![0u64; n * n * n];
-            for (i, &set) in sets.iter().enumerate().take(n * n * n) {
-                t[(i % (n * n)) * n + i / (n * n)] = set;
-            }
-            self.transposed = Some(t);
+        // column at a time — for the triplets something is known of. The triplets nothing is
+        // known of come last: by then those instances have inferred most of what they will
+        // hold, and they run both rules, so the instances they take part in are evaluated
+        // once with that rather than again in a second round over every inferred triplet.
+        let mut left_only_until = 0;
+        if full {
+            let universal = alg.universal_words();
+            let (known, unknown): (Vec<usize>, Vec<usize>) = frontier.iter().partition(|&&t| {
+                orderings(net, t)
+                    .iter()
+                    .any(|&o| net.words_at(o) != universal)
+            });
+            left_only_until = known.len();
+            frontier = known;
+            frontier.extend(unknown);
         }
+        let transposable = full && alg.one_word().is_some() && n <= MAX_TRANSPOSED_POINTS;
+        let mut state = vec![0u8; n * n * n];
         while !frontier.is_empty() {
-            frontier.sort_unstable();
-            frontier.dedup();
             self.stats.rounds += 1;
             self.stats.triplets_processed += frontier.len();
-            for &t in &frontier {
-                queued[t] = false;
+            for (i, &t) in frontier.iter().enumerate() {
+                state[t] = if i < left_only_until {
+                    PENDING_LEFT
+                } else {
+                    PENDING_BOTH
+                };
             }
             let mut next = Vec::new();
+            let (left_part, both_part) = frontier.split_at(left_only_until);
             // Fixed-size chunks (never thread-count dependent): each chunk's compositions are
             // evaluated in parallel against the network as the chunks before it left it, then
             // applied in order. Bounded memory (a round over all triplets of 200 points would
             // otherwise hold ~10^9 proposals), and later chunks see earlier refinements.
-            for chunk in frontier.chunks(CHUNK) {
-                let mut both = Vec::with_capacity(chunk.len());
+            let chunks = left_part
+                .chunks(CHUNK)
+                .map(|c| (c, false))
+                .chain(both_part.chunks(CHUNK).map(|c| (c, true)));
+            for (chunk, both) in chunks {
+                if both && transposable && self.transposed.is_none() {
+                    self.transposed = Some(transpose(net.one_word_sets(), n));
+                }
                 for &t in chunk {
-                    both.push(self.sync_permutations(net, alg, t)? || !left_only);
+                    state[t] &= !(PENDING_LEFT | PENDING_BOTH);
+                }
+                let snapshot: &Network = net;
+                let synced: Vec<Vec<Refinement>> = chunk
+                    .par_iter()
+                    .map(|&t| permutation_refinements(snapshot, alg, t))
+                    .collect();
+                for (&t, refinements) in chunk.iter().zip(synced) {
+                    let mut changed = false;
+                    for r in refinements {
+                        changed |=
+                            self.refine(net, r.target as usize, r.allowed.words(), r.reason)?;
+                    }
+                    // Run with the left rule only, a triplet its permutations refined is
+                    // queued for the right one (instances before it read its old sets).
+                    if changed && !both {
+                        queue(&mut state, &mut next, t);
+                    }
                 }
                 let snapshot: &Network = net;
                 let transposed = self.transposed.as_deref();
                 let proposals: Vec<Vec<Proposal>> = chunk
                     .par_iter()
-                    .zip(&both)
-                    .map(|(&t, &both)| compositions(snapshot, transposed, alg, t, both))
+                    .map(|&t| compositions(snapshot, transposed, alg, t, both))
                     .collect();
                 for p in proposals.into_iter().flatten() {
                     let target = p.target as usize;
-                    if self.refine(
+                    if self.refine_at(
                         net,
                         target,
+                        p.transposed as usize,
                         p.allowed.words(),
                         Reason::Composition(p.left, p.right),
                     )? {
-                        let canon = canonical(net, target);
-                        if !queued[canon] {
-                            queued[canon] = true;
-                            next.push(canon);
-                        }
+                        queue(&mut state, &mut next, p.canon as usize);
                     }
                 }
             }
+            next.sort_unstable();
             frontier = next;
-            left_only = false;
+            left_only_until = 0;
         }
         Ok(())
     }
@@ -475,6 +519,19 @@ impl Propagation {
         &mut self,
         net: &mut Network,
         target: usize,
+        allowed: &[u64],
+        reason: Reason,
+    ) -> Result<bool, Emptied> {
+        let transposed = transposed_index(net.n_points(), target);
+        self.refine_at(net, target, transposed, allowed, reason)
+    }
+
+    /// [`Self::refine`] with the target's index in the transposed copy given.
+    fn refine_at(
+        &mut self,
+        net: &mut Network,
+        target: usize,
+        transposed: usize,
         allowed: &[u64],
         reason: Reason,
     ) -> Result<bool, Emptied> {
@@ -502,42 +559,156 @@ impl Propagation {
         }
         self.stats.refinements += 1;
         if let Some(t) = &mut self.transposed {
-            let n = net.n_points();
-            t[(target % (n * n)) * n + target / (n * n)] = net.words_at(target)[0];
+            t[transposed] = net.words_at(target)[0];
         }
         if let Some(r) = &mut self.reasons {
             r[target] = reason;
         }
         Ok(true)
     }
+}
 
-    /// Makes the six orderings of one unordered triplet agree through the permutation tables;
-    /// whether that changed any.
-    fn sync_permutations(
-        &mut self,
-        net: &mut Network,
-        alg: &Algebra,
-        canon: usize,
-    ) -> Result<bool, Emptied> {
-        let [a, b, c] = net.triplet(canon);
-        let mut any = false;
-        let mut permuted = vec![0u64; alg.words()];
-        loop {
-            let mut changed = false;
-            for (x, y, z) in processing_order(a, b, c) {
-                let from = net.index(x, y, z);
-                for op in Permutation::ALL {
-                    let (p, q, r) = op.apply(x, y, z);
-                    let to = net.index(p, q, r);
-                    alg.permute_into(op, net.words_at(from), &mut permuted);
-                    changed |=
-                        self.refine(net, to, &permuted, Reason::Permutation(op, from as u32))?;
+/// A triplet's state in the queue of [`Propagation::run`]: to be run this round with both rules.
+const PENDING_BOTH: u8 = 1;
+/// To be run this round with the left rule only (the first round of a full closure).
+const PENDING_LEFT: u8 = 2;
+/// In the next round's queue.
+const IN_NEXT: u8 = 4;
+
+/// Queues the unordered triplet `t`, whose sets changed, for the next round — unless it is
+/// still to run this round with both rules: then every instance it takes part in is evaluated
+/// with its new sets anyway.
+fn queue(state: &mut [u8], next: &mut Vec<usize>, t: usize) {
+    if state[t] & (PENDING_BOTH | IN_NEXT) == 0 {
+        state[t] |= IN_NEXT;
+        next.push(t);
+    }
+}
+
+/// The network's sets again, at `(x·n + y)·n + w` for `{w,x:y}` (a row per pair, gathered
+/// in parallel).
+fn transpose(sets: &[u64], n: usize) -> Vec<u64> {
+    let nn = n * n;
+    let mut t = vec![0u64; nn * n];
+    t.par_chunks_mut(n.max(1))
+        .enumerate()
+        .for_each(|(xy, row)| {
+            for (w, out) in row.iter_mut().enumerate() {
+                *out = sets[w * nn + xy];
+            }
+        });
+    t
+}
+
+/// A refinement found by a read-only pass, applied later by [`Propagation::refine`].
+struct Refinement {
+    target: u32,
+    allowed: Allowed,
+    reason: Reason,
+}
+
+/// The refinements that make the six orderings of one unordered triplet agree through the
+/// permutation tables, in the order a pass over them applies them (to the fixpoint, or up to
+/// the one that empties a set). Read-only, so the triplets of a chunk are synchronised in
+/// parallel (they share no ordering); applying the list in order gives what the pass gave.
+fn permutation_refinements(net: &Network, alg: &Algebra, canon: usize) -> Vec<Refinement> {
+    if alg.words() == 1 {
+        return permutation_refinements_one_word(net, alg, canon);
+    }
+    let [a, b, c] = net.triplet(canon);
+    let words = alg.words();
+    let order = processing_order(a, b, c);
+    let slot = |x: usize, y: usize, z: usize| {
+        order
+            .iter()
+            .position(|&o| o == (x, y, z))
+            .unwrap_or_default()
+    };
+    let mut local: Vec<u64> = order
+        .iter()
+        .flat_map(|&(x, y, z)| net.words_at(net.index(x, y, z)).iter().copied())
+        .collect();
+    let mut permuted = vec![0u64; words];
+    let mut out = Vec::new();
+    loop {
+        let mut changed = false;
+        for (from_slot, &(x, y, z)) in order.iter().enumerate() {
+            let from = net.index(x, y, z);
+            for op in Permutation::ALL {
+                let (p, q, r) = op.apply(x, y, z);
+                let to_slot = slot(p, q, r);
+                alg.permute_into(op, &local[from_slot * words..][..words], &mut permuted);
+                let cur = &mut local[to_slot * words..][..words];
+                if cur.iter().zip(&permuted).all(|(c, p)| c & !p == 0) {
+                    continue;
                 }
+                let emptied = cur.iter().zip(&permuted).all(|(c, p)| c & p == 0);
+                for (c, p) in cur.iter_mut().zip(&permuted) {
+                    *c &= p;
+                }
+                out.push(Refinement {
+                    target: net.index(p, q, r) as u32,
+                    allowed: if words == 1 {
+                        Allowed::One([permuted[0]])
+                    } else {
+                        Allowed::Many(permuted.as_slice().into())
+                    },
+                    reason: Reason::Permutation(op, from as u32),
+                });
+                if emptied {
+                    return out;
+                }
+                changed = true;
             }
-            if !changed {
-                return Ok(any);
+        }
+        if !changed {
+            return out;
+        }
+    }
+}
+
+/// [`permutation_refinements`] for one-word sets: the six sets on the stack, and the slot
+/// each operation takes each ordering to from a table (the same pass, the same list).
+fn permutation_refinements_one_word(net: &Network, alg: &Algebra, canon: usize) -> Vec<Refinement> {
+    static SLOTS: std::sync::OnceLock<[[usize; 5]; 6]> = std::sync::OnceLock::new();
+    let slots = SLOTS.get_or_init(|| {
+        let order = processing_order(0, 1, 2);
+        std::array::from_fn(|from| {
+            let (x, y, z) = order[from];
+            std::array::from_fn(|k| {
+                let image = Permutation::ALL[k].apply(x, y, z);
+                order.iter().position(|&o| o == image).unwrap_or_default()
+            })
+        })
+    });
+    let [a, b, c] = net.triplet(canon);
+    let sets = net.one_word_sets();
+    let index = processing_order(a, b, c).map(|(x, y, z)| net.index(x, y, z));
+    let mut local = index.map(|i| sets[i]);
+    let mut out = Vec::new();
+    loop {
+        let mut changed = false;
+        for (from, to_slots) in slots.iter().enumerate() {
+            for (&op, &to) in Permutation::ALL.iter().zip(to_slots) {
+                let permuted = alg.permute_word(op, local[from]);
+                if local[to] & !permuted == 0 {
+                    continue;
+                }
+                let emptied = local[to] & permuted == 0;
+                local[to] &= permuted;
+                out.push(Refinement {
+                    target: index[to] as u32,
+                    allowed: Allowed::One([permuted]),
+                    reason: Reason::Permutation(op, index[from] as u32),
+                });
+                if emptied {
+                    return out;
+                }
+                changed = true;
             }
-            any = true;
+        }
+        if !changed {
+            return out;
         }
     }
 }
@@ -580,6 +751,8 @@ fn compositions(
             if alg.compose_refines(given, net.words_at(right), net.words_at(target), &mut out) {
                 proposals.push(Proposal {
                     target: target as u32,
+                    transposed: transposed_index(n, target) as u32,
+                    canon: canonical(net, target) as u32,
                     left: pqr as u32,
                     right: right as u32,
                     allowed: Allowed::Many(out.as_slice().into()),
@@ -593,6 +766,8 @@ fn compositions(
             if alg.compose_refines(net.words_at(left), given, net.words_at(target), &mut out) {
                 proposals.push(Proposal {
                     target: target as u32,
+                    transposed: transposed_index(n, target) as u32,
+                    canon: canonical(net, target) as u32,
                     left: left as u32,
                     right: pqr as u32,
                     allowed: Allowed::Many(out.as_slice().into()),
@@ -603,18 +778,26 @@ fn compositions(
     proposals
 }
 
-/// The most relations a fixed right input is gathered for ([`SetView::fixed_right`]: a
-/// pass over the block entries each; past it, each composition reads the block table).
+/// The fewest relations a fixed right input is always gathered for ([`SetView::fixed_right`]:
+/// a pass over the block entries each); a larger set is gathered when the row is long enough
+/// to repay it (one relation per [`GATHER_ROW_POINTS`] points), else each composition reads
+/// the block table.
 const FIXED_RIGHT_MAX: usize = 4;
 
+/// Points of a row that repay gathering one more relation of a fixed right input.
+const GATHER_ROW_POINTS: usize = 8;
+
 /// [`compositions`] for sets of one word, composed by the block tables (EDC and every
-/// built-in calculus): the same rules in the same order, so the same proposals.
+/// built-in calculus): the same rules, so the same closed network.
 ///
 /// The innermost loop of every closure, so written for its common case: one input of every
 /// rule here is the triplet's own set, fixed over the fourth point `w`. Its block-table entries
 /// are taken once ([`SetView::fixed_left`], [`SetView::fixed_right`]), so each composition
-/// is one lookup per block of the other input; two single states read the base table. Rows of the
-/// network (`{p,q:w}` over `w`) are read as slices, without a bounds check per point.
+/// is one lookup per block of the other input, whatever that set holds — no branch on whether
+/// it is single, universal or neither — and a row of the network (`{p,q:w}` over `w`) is one
+/// pass of lookups and a test, instantiated per block count ([`scan_row`]). The three points of
+/// the triplet itself are skipped only when their entry would refine (their sets repeat a point
+/// and are never read), so the pass has no test per point either.
 fn compositions_one_word(
     net: &Network,
     transposed: Option<&[u64]>,
@@ -622,12 +805,30 @@ fn compositions_one_word(
     canon: usize,
     both: bool,
 ) -> Vec<Proposal> {
+    match (view.n_blocks(), view.block()) {
+        (1, _) => rows_one_word::<1, 0>(net, transposed, view, canon, both),
+        (2, _) => rows_one_word::<2, 0>(net, transposed, view, canon, both),
+        // Three bytes: calculi of 17 to 24 relations, EDC's 20 among them.
+        (3, 8) => rows_one_word::<3, 8>(net, transposed, view, canon, both),
+        (3, _) => rows_one_word::<3, 0>(net, transposed, view, canon, both),
+        // More blocks have no gathered entries (`fixed_left` is `None`): any count serves.
+        _ => rows_one_word::<0, 0>(net, transposed, view, canon, both),
+    }
+}
+
+fn rows_one_word<const NB: usize, const B: usize>(
+    net: &Network,
+    transposed: Option<&[u64]>,
+    view: &SetView<'_, 1>,
+    canon: usize,
+    both: bool,
+) -> Vec<Proposal> {
     let n = net.n_points();
+    let nn = n * n;
     let [a, b, c] = net.triplet(canon);
     let sets = net.one_word_sets();
     let mut proposals = Vec::new();
     let (mut left_buf, mut right_buf) = (Vec::new(), Vec::new());
-    let single = |x: u64| crate::binary::set_ops::single(&[x]);
     // A universal set of the triplet's refines nothing as either input when `U` absorbs
     // (EDC's tables: `U ∘ s = s ∘ U = U`): half of a half-known network's rule instances.
     let universal = view.universal[0];
@@ -635,111 +836,152 @@ fn compositions_one_word(
         view.universal_absorbs_from_left(),
         view.universal_absorbs_from_right(),
     );
+    let own = |w: usize| w == a || w == b || w == c;
+    // The canonical index of {x, y, w} for x, y of the triplet: what the applying loop queues.
+    let canonical_with = |x: usize, y: usize, w: usize| {
+        let (lo, hi) = (x.min(y), x.max(y));
+        let t = if w < lo {
+            [w, lo, hi]
+        } else if w < hi {
+            [lo, w, hi]
+        } else {
+            [lo, hi, w]
+        };
+        ((t[0] * n + t[1]) * n + t[2]) as u32
+    };
+    let max_right = FIXED_RIGHT_MAX.max(n / GATHER_ROW_POINTS);
     for (p, q, r) in processing_order(a, b, c) {
         let pqr = net.index(p, q, r);
         let given = sets[pqr];
-        let left_rule = !(given == universal && absorbs_left);
-        let right_rule = both && !(given == universal && absorbs_right);
-        if !left_rule && !right_rule {
-            continue;
-        }
-        // Index strides: {p,q:w} = pq + w, {q,r:w} = qr + w, {w,p:r} = w·n² + pr,
-        // {w,p:q} = w·n² + pq'.
-        let (pq, qr) = (net.index(p, q, 0), net.index(q, r, 0));
-        let (wpr, wpq) = (net.index(0, p, r), net.index(0, p, q));
-        let nn = n * n;
-        let (targets, rights) = (&sets[pq..pq + n], &sets[qr..qr + n]);
-        let given_single = single(given);
-        let row = if left_rule {
-            view.fixed_left(&[given], &mut left_buf)
-        } else {
-            None
-        };
-        let col = if right_rule {
-            view.fixed_right(&[given], FIXED_RIGHT_MAX, &mut right_buf)
-        } else {
-            None
-        };
-        for w in 0..n {
-            if w == a || w == b || w == c {
-                continue;
-            }
-            // {p,q:w} ⊆ {p,q:r} ∘ {q,r:w}
-            if left_rule
-                && let Some(acc) =
-                    refining_one_word(view, row, given_single, rights[w], given, true, targets[w])
-            {
-                proposals.push(Proposal {
-                    target: (pq + w) as u32,
-                    left: pqr as u32,
-                    right: (qr + w) as u32,
-                    allowed: Allowed::One([acc]),
-                });
-            }
-            if !right_rule {
-                continue;
-            }
-            // {w,p:r} ⊆ {w,p:q} ∘ {p,q:r}
-            let (target, left) = (w * nn + wpr, w * nn + wpq);
-            let (left_set, target_set) = match transposed {
-                Some(t) => (t[wpq * n + w], t[wpr * n + w]),
-                None => (sets[left], sets[target]),
+        if !(given == universal && absorbs_left) {
+            // {p,q:w} ⊆ {p,q:r} ∘ {q,r:w}, over w: a row of targets, a row of right inputs.
+            let (pq, qr) = (net.index(p, q, 0), net.index(q, r, 0));
+            let (targets, rights) = (&sets[pq..pq + n], &sets[qr..qr + n]);
+            let mut found = |w: usize, acc: u64| {
+                if !own(w) {
+                    proposals.push(Proposal {
+                        target: (pq + w) as u32,
+                        transposed: ((q * n + w) * n + p) as u32,
+                        canon: canonical_with(p, q, w),
+                        left: pqr as u32,
+                        right: (qr + w) as u32,
+                        allowed: Allowed::One([acc]),
+                    });
+                }
             };
-            if let Some(acc) =
-                refining_one_word(view, col, given_single, left_set, given, false, target_set)
-            {
-                proposals.push(Proposal {
-                    target: target as u32,
-                    left: left as u32,
-                    right: pqr as u32,
-                    allowed: Allowed::One([acc]),
-                });
+            match view.fixed_left(&[given], &mut left_buf) {
+                Some(e) if NB > 0 && e.len() >= NB << B => scan_row(
+                    rights.iter().copied(),
+                    targets.iter().copied(),
+                    |x| view.through_word::<NB, B>(e, x),
+                    &mut found,
+                ),
+                _ => refine_row(
+                    rights.iter().copied(),
+                    targets.iter().copied(),
+                    |x, t| {
+                        view.composition_refining(&[given], &[x], &[t])
+                            .map(|o| o[0])
+                    },
+                    &mut found,
+                ),
+            }
+        }
+        if both && !(given == universal && absorbs_right) {
+            // {w,p:r} ⊆ {w,p:q} ∘ {p,q:r}, over w: a column of the network, read as a row of
+            // the transposed copy when there is one.
+            let (wpr, wpq) = (net.index(0, p, r), net.index(0, p, q));
+            let mut found = |w: usize, acc: u64| {
+                if !own(w) {
+                    proposals.push(Proposal {
+                        target: (w * nn + wpr) as u32,
+                        transposed: (wpr * n + w) as u32,
+                        canon: canonical_with(p, r, w),
+                        left: (w * nn + wpq) as u32,
+                        right: pqr as u32,
+                        allowed: Allowed::One([acc]),
+                    });
+                }
+            };
+            let entries = view.fixed_right(&[given], max_right, &mut right_buf);
+            let compose = |x: u64, t: u64| {
+                view.composition_refining(&[x], &[given], &[t])
+                    .map(|o| o[0])
+            };
+            match (transposed, entries) {
+                (Some(tr), Some(e)) if NB > 0 && e.len() >= NB << B => scan_row(
+                    tr[wpq * n..][..n].iter().copied(),
+                    tr[wpr * n..][..n].iter().copied(),
+                    |x| view.through_word::<NB, B>(e, x),
+                    &mut found,
+                ),
+                (Some(tr), _) => refine_row(
+                    tr[wpq * n..][..n].iter().copied(),
+                    tr[wpr * n..][..n].iter().copied(),
+                    compose,
+                    &mut found,
+                ),
+                (None, Some(e)) if NB > 0 && e.len() >= NB << B => scan_row(
+                    sets[wpq..].iter().step_by(nn).copied(),
+                    sets[wpr..].iter().step_by(nn).copied(),
+                    |x| view.through_word::<NB, B>(e, x),
+                    &mut found,
+                ),
+                (None, _) => refine_row(
+                    sets[wpq..].iter().step_by(nn).copied(),
+                    sets[wpr..].iter().step_by(nn).copied(),
+                    compose,
+                    &mut found,
+                ),
             }
         }
     }
     proposals
 }
 
-/// The composition of one rule instance when it refines `target` (see
-/// [`compositions_one_word`]): two single states by the base table (a scenario's every
-/// instance); the triplet's own set `fixed` by its block entries (`entries`), one lookup per
-/// block of the other input; otherwise the blocks of both. Always inlined: it is the body of
-/// the innermost loop, and a call per instance cost a third of ternary closure.
+/// One rule over a row: `others[w]` composed with the fixed set by `compose` (the gathered
+/// block entries), reported to `found` where it does not cover `targets[w]`. Always inlined:
+/// it is the body of the innermost loop (a call per instance cost a third of ternary closure).
 #[inline(always)]
-fn refining_one_word(
-    view: &SetView<'_, 1>,
-    entries: Option<&[[u64; 1]]>,
-    given_single: Option<usize>,
-    other: u64,
-    fixed: u64,
-    fixed_left: bool,
-    target: u64,
-) -> Option<u64> {
-    let acc = match (
-        given_single.zip(crate::binary::set_ops::single(&[other])),
-        entries,
-    ) {
-        (Some((g, o)), _) if fixed_left => view.base_at(g, o)[0],
-        (Some((g, o)), _) => view.base_at(o, g)[0],
-        (None, Some(e)) => view.through(e, &[other])[0],
-        (None, None) if fixed_left => {
-            return view
-                .composition_refining(&[fixed], &[other], &[target])
-                .map(|o| o[0]);
+fn scan_row(
+    others: impl Iterator<Item = u64>,
+    targets: impl Iterator<Item = u64>,
+    compose: impl Fn(u64) -> u64,
+    found: &mut impl FnMut(usize, u64),
+) {
+    for (w, (x, t)) in others.zip(targets).enumerate() {
+        let acc = compose(x);
+        if t & !acc != 0 {
+            found(w, acc);
         }
-        (None, None) => {
-            return view
-                .composition_refining(&[other], &[fixed], &[target])
-                .map(|o| o[0]);
+    }
+}
+
+/// [`scan_row`] when the fixed set's entries are not gathered: `refines(other, target)` is the
+/// composition when it refines the target.
+#[inline(always)]
+fn refine_row(
+    others: impl Iterator<Item = u64>,
+    targets: impl Iterator<Item = u64>,
+    refines: impl Fn(u64, u64) -> Option<u64>,
+    found: &mut impl FnMut(usize, u64),
+) {
+    for (w, (x, t)) in others.zip(targets).enumerate() {
+        if let Some(acc) = refines(x, t) {
+            found(w, acc);
         }
-    };
-    (target & !acc != 0).then_some(acc)
+    }
 }
 
 /// The flat indices of the six orderings of the triplet with canonical index `canon`.
 fn orderings(net: &Network, canon: usize) -> [usize; 6] {
     let [a, b, c] = net.triplet(canon);
     all_orderings(a, b, c).map(|(x, y, z)| net.index(x, y, z))
+}
+
+/// The index in [`Propagation::transposed`] of the set at `index`.
+fn transposed_index(n: usize, index: usize) -> usize {
+    (index % (n * n)) * n + index / (n * n)
 }
 
 /// The canonical (sorted) index of the unordered triplet of an ordered one.

@@ -13,10 +13,12 @@ use crate::reason::state_set::{StateSet, count, fill_universal, resolve_label, w
 
 /// Core-seconds of closure per ordered triplet × fourth point × word of a set: measured on
 /// the half-known EDC networks of `cargo bench -p qsr-core --bench closure` (inferred sets of
-/// several states — the slowest case measured; a scenario closes about 4x faster): n = 140
-/// took 8.4 s on two threads, at most 16.9 core-seconds over 140⁴ units. The fitted exponent
-/// is 3.4 (n = 30 … 140), so n⁴ errs high for larger networks: an upper bound.
-pub const CLOSURE_SECONDS_PER_UNIT: f64 = 4.4e-8;
+/// several states — the slowest case measured; a scenario closes 2–3x faster): n = 140 took
+/// 2.13 s on two threads, at most 4.3 core-seconds over 140⁴ units (n = 200: 7.5 s, 9.3e-9
+/// per unit). The fitted exponent is 3.4 (n = 30 … 200), so n⁴ errs high for larger
+/// networks: an upper bound there (networks of a few dozen points, which take milliseconds,
+/// cost more per unit).
+pub const CLOSURE_SECONDS_PER_UNIT: f64 = 1.2e-8;
 
 /// What building and closing a network of `n` points takes, before anything is allocated.
 ///
