@@ -8,7 +8,11 @@
 //! converse of `R(i,j)`), so each revision reads two sets and the other three revisions of a
 //! triangle follow by converse (`(R ∘ S)˘ = S˘ ∘ R˘`, which [`super::BinaryAlgebra::check`]
 //! reports). Sets are `[u64; W]` with `W` fixed at compile time, composed by
-//! [`super::set_ops`]'s block tables. An edge nothing constrains starts outside the queue
+//! [`super::set_ops`]'s block tables; for one-word sets of at most 16 relations (RCC-8, Allen,
+//! the point algebra) the loop is instantiated per layout of the compact table, so a
+//! composition is one lookup (≤ 8 relations) or four with constant shifts and no bounds check
+//! (on Allen's 320-node networks split into ORD-Horn, a third of the time of the general
+//! loop). An edge nothing constrains starts outside the queue
 //! when `U ∘ U = U`: each revision runs when either of its two inputs is popped, so one with
 //! two universal inputs can refine nothing.
 //!
@@ -18,7 +22,7 @@
 
 use super::edge_queue::EdgeQueue;
 use super::network::BinaryNetwork;
-use super::set_ops::{SetOps, SetView};
+use super::set_ops::{SetOps, SetView, compose_compact};
 
 /// Why a binary network is inconsistent.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -217,6 +221,73 @@ impl<'a, const W: usize> Propagator<'a, W> {
 
     /// PC-2 until the queue is empty or a set empties.
     pub(crate) fn run(&mut self) -> Result<(), BinaryContradiction> {
+        if let Some((nb, block, table)) = self.view.compact_layout() {
+            // One word of at most 16 relations (RCC-8, Allen, the point algebra, …): the loop
+            // instantiated for the compact table's layout.
+            macro_rules! layouts {
+                ($(($nb:literal, $b:literal))*) => {
+                    match (nb, block) {
+                        $(($nb, $b) => return self.run_compact::<$nb, $b>(table),)*
+                        _ => {}
+                    }
+                };
+            }
+            layouts!((1, 1)(1, 2)(1, 3)(1, 4)(1, 5)(1, 6)(1, 7)(1, 8)(2, 5)(2, 6)(2, 7)(2, 8));
+        }
+        self.run_general()
+    }
+
+    /// [`Self::run`] for one-word sets composed by the compact table of `NB` blocks of `B`
+    /// bits ([`compose_compact`]): the same revisions in the same order.
+    fn run_compact<const NB: usize, const B: usize>(
+        &mut self,
+        table: &[u16],
+    ) -> Result<(), BinaryContradiction> {
+        let Some(table) = table.get(..(NB << B) * (NB << B)) else {
+            return self.run_general();
+        };
+        let n = self.n;
+        let word = |set: u64| -> [u64; W] { std::array::from_fn(|_| set) };
+        while let Some(edge) = self.queue.pop() {
+            let (i, j) = (edge / n, edge % n);
+            let (rij, rji) = (self.m[i * n + j][0], self.m[j * n + i][0]);
+            for k in 0..n {
+                if k == i || k == j {
+                    continue;
+                }
+                // R(i,k) ∩= R(i,j) ∘ R(j,k)
+                let mut rik = self.m[i * n + k][0];
+                let acc = compose_compact::<NB, B>(table, rij, self.m[j * n + k][0]);
+                if rik & !acc != 0 {
+                    rik &= acc;
+                    self.revisions += 1;
+                    self.put(i, k, word(rik));
+                    if rik == 0 {
+                        self.clear_queue();
+                        return Err(BinaryContradiction::Composed { a: i, via: j, b: k });
+                    }
+                    self.enqueue(i, k);
+                }
+                // R(j,k) ∩= R(j,i) ∘ R(i,k) (the converse of R(k,j) ∩= R(k,i) ∘ R(i,j))
+                let rjk = self.m[j * n + k][0];
+                let acc = compose_compact::<NB, B>(table, rji, rik);
+                if rjk & !acc != 0 {
+                    let new = rjk & acc;
+                    self.revisions += 1;
+                    self.put(j, k, word(new));
+                    if new == 0 {
+                        self.clear_queue();
+                        return Err(BinaryContradiction::Composed { a: k, via: i, b: j });
+                    }
+                    self.enqueue(j, k);
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// [`Self::run`] for any layout, through [`SetView::refine`].
+    fn run_general(&mut self) -> Result<(), BinaryContradiction> {
         let n = self.n;
         while let Some(edge) = self.queue.pop() {
             let (i, j) = (edge / n, edge % n);
