@@ -54,3 +54,41 @@ def test_the_table_gives_qrm_s_state_for_every_ordering(bench) -> None:  # type:
         rows = pts[:, list(perm), :].reshape(-1, 6)
         want = edc.classify(rows)
         assert np.array_equal(bench.SIX[key, o], want), f"ordering {perm}"
+
+
+CLASSIFY = pathlib.Path(__file__).resolve().parents[2] / "crates" / "qrm-py" / "benches" / "classify_numpy.py"
+
+
+@pytest.fixture(scope="module")
+def classify_bench():  # type: ignore[no-untyped-def]
+    spec = importlib.util.spec_from_file_location("classify_numpy", CLASSIFY)
+    assert spec is not None and spec.loader is not None
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def test_the_classification_baselines_give_qrm_s_state(classify_bench) -> None:  # type: ignore[no-untyped-def]
+    """numpy-naive and numpy-lut (whose key and table numba's loops share) label random
+    triplets and triplets on the EDC's boundaries as qrm does."""
+    t = classify_bench.triplets(50_000)
+    # A = (0, 0), B = (0, 1): C at the normalised point itself, on every threshold and circle
+    on = np.array([[0.0, 0.0, 0.0, 1.0, x, y] for x in (-1.0, -0.5, 0.0, 0.5, 1.0)
+                   for y in (-1.0, 0.0, 0.5, 1.0, 2.0)])
+    t = np.vstack([t, on])
+    truth = qrm.Calculus.builtin("edc").classify(t)
+    assert np.array_equal(classify_bench.edc_naive(t), truth)
+    out = np.empty(len(t), dtype=np.int64)
+    classify_bench.edc_lut(t, out)
+    assert np.array_equal(out, truth)
+
+
+def test_the_classification_ratio_is_against_the_strongest_baseline_of_its_layout(classify_bench) -> None:  # type: ignore[no-untyped-def]
+    best = {name: {"wall": w, "cpu": w} for name, w in [
+        ("numpy-naive", 9.0), ("numpy-lut", 3.0), ("numba", 2.0), ("numba columns", 1.5),
+        ("qrm rows, 1 thread", 1.0), ("qrm columns, 1 thread", 1.0), ("memory read (bound)", 0.1)]}
+    assert classify_bench.strongest(best, columns=False) == "numba"
+    assert classify_bench.strongest(best, columns=True) == "numba columns"
+    text = classify_bench.report(1, 1_000_000, best)
+    assert "qrm rows against the strongest baseline of its layout (numba): 2.00x" in text
+    assert "qrm columns against the strongest baseline of its layout (numba columns): 1.50x" in text

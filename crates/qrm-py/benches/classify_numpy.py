@@ -10,15 +10,14 @@ Baselines, all checked to give qrm's labels on every triplet before any is timed
   from key to state;
 - `numba`: the same rule as a plain loop under `@njit` (one thread), and `numba-parallel`
   (`parallel=True`, `prange`, all cores).
-qrm is timed in the same process through the wheel (`Calculus.classify` with `out=`, its pool
-pinned by RAYON_NUM_THREADS) for one core and all cores, best of --repeat runs each.
-
-The bound: reading a 48-byte triplet from memory, measured here as a NumPy sum over the same
-array (one pass, no arithmetic to speak of). Classification cannot go faster than its input
-arrives.
+qrm is timed through the wheel (`Calculus.classify` with `out=`, rows; `classify_columns`,
+six contiguous columns) in the same process as the baselines of its thread count: one process
+per thread count (its pools pinned by RAYON_NUM_THREADS / NUMBA_NUM_THREADS), interleaved
+rounds, best wall and best CPU time each (the way `sampling_numpy.py` times the PQRM step).
+Every ratio is against the strongest baseline of the same layout and thread count.
 
 Usage (workspace root; a venv with numpy, numba and the qrm wheel):
-    python crates/qrm-py/benches/classify_numpy.py [--n 10000000] [--repeat 3]
+    python crates/qrm-py/benches/classify_numpy.py [--n 10000000] [--repeat 5] [--threads 1,2]
 The criterion bench `crates/qsr-core/benches/classify.rs` times the Rust kernel without
 Python. This script lives with the wheel it imports (qrm-py), above the kernel crates.
 """
@@ -95,7 +94,7 @@ def edc_lut(t: np.ndarray, out: np.ndarray) -> None:
 def numba_kernels() -> Dict[str, Callable[[np.ndarray, np.ndarray], None]]:
     """`@njit` loops, one thread and `parallel=True`; empty if numba is not installed."""
     try:
-        import numba  # type: ignore[import-untyped]
+        import numba  # type: ignore[import-untyped,import-not-found,unused-ignore]
     except ImportError:
         return {}
 
@@ -126,113 +125,148 @@ def numba_kernels() -> Dict[str, Callable[[np.ndarray, np.ndarray], None]]:
         for i in numba.prange(t.shape[0]):
             one(t, out, i)
 
+    def column_body(ax, ay, bx, by, cx, cy, out, i):  # type: ignore[no-untyped-def]
+        dx = bx[i] - ax[i]
+        dy = by[i] - ay[i]
+        vx = cx[i] - ax[i]
+        vy = cy[i] - ay[i]
+        inv = 1.0 / (dx * dx + dy * dy)
+        x = -(dx * vy - dy * vx) * inv
+        y = (dx * vx + dy * vy) * inv
+        right = 1 if x >= 0.0 else 0
+        near_a = x * x + y * y <= 1.0
+        near_b = x * x + (y - 1.0) * (y - 1.0) <= 1.0
+        out[i] = lut[right | (near_a << 1) | (near_b << 2) | (((y >= 0.0) + (y >= 0.5) + (y >= 1.0)) << 3)]
+
+    column = numba.njit(column_body)
+
     @numba.njit
     def columns(ax, ay, bx, by, cx, cy, out):  # type: ignore[no-untyped-def]
         for i in range(ax.shape[0]):
-            dx = bx[i] - ax[i]
-            dy = by[i] - ay[i]
-            vx = cx[i] - ax[i]
-            vy = cy[i] - ay[i]
-            inv = 1.0 / (dx * dx + dy * dy)
-            x = -(dx * vy - dy * vx) * inv
-            y = (dx * vx + dy * vy) * inv
-            right = 1 if x >= 0.0 else 0
-            near_a = x * x + y * y <= 1.0
-            near_b = x * x + (y - 1.0) * (y - 1.0) <= 1.0
-            out[i] = lut[right | (near_a << 1) | (near_b << 2) | (((y >= 0.0) + (y >= 0.5) + (y >= 1.0)) << 3)]
+            column(ax, ay, bx, by, cx, cy, out, i)
 
-    return {"numba": serial, "numba-parallel": parallel, "numba columns": columns}
+    @numba.njit(parallel=True)
+    def columns_parallel(ax, ay, bx, by, cx, cy, out):  # type: ignore[no-untyped-def]
+        for i in numba.prange(ax.shape[0]):
+            column(ax, ay, bx, by, cx, cy, out, i)
 
-
-def best_of(f: Callable[[], object], repeat: int) -> float:
-    f()  # warm-up (and numba's compile)
-    best = float("inf")
-    for _ in range(repeat):
-        t0 = time.perf_counter()
-        f()
-        best = min(best, time.perf_counter() - t0)
-    return best
-
-
-def qrm_times(n: int, repeat: int) -> Dict[str, float]:
-    """qrm through the wheel, rows and columns, in child processes so each gets its own pool
-    size."""
-    res: Dict[str, float] = {}
-    for threads in (1, os.cpu_count() or 1):
-        env = dict(os.environ, RAYON_NUM_THREADS=str(threads))
-        r = subprocess.run(
-            [sys.executable, __file__, "--qrm-only", "--n", str(n), "--repeat", str(repeat)],
-            env=env, capture_output=True, text=True,
-        )
-        if r.returncode != 0:
-            print(f"qrm ({threads} thread(s)) not timed: {r.stderr.strip().splitlines()[-1:]}")
-            continue
-        plural = "s" if threads > 1 else ""
-        for layout, seconds in json.loads(r.stdout).items():
-            res[f"qrm {layout} ({threads} thread{plural})"] = seconds
-    return res
+    return {"numba": serial, "numba-parallel": parallel, "numba columns": columns,
+            "numba-parallel columns": columns_parallel}
 
 
 def triplets(n: int) -> np.ndarray:
     return np.random.default_rng(7).uniform(0.0, 100.0, size=(n, 6))
 
 
-def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--n", type=int, default=10_000_000)
-    ap.add_argument("--repeat", type=int, default=3)
-    ap.add_argument("--qrm-only", action="store_true", help=argparse.SUPPRESS)
-    args = ap.parse_args()
-    t = triplets(args.n)
-    out = np.empty(args.n, dtype=np.int64)
-    if args.qrm_only:
-        import qrm
-
-        edc = qrm.Calculus.builtin("edc")
-        cols = [np.ascontiguousarray(t[:, j]) for j in range(6)]
-        print(json.dumps({
-            "rows": best_of(lambda: edc.classify(t, out=out), args.repeat),
-            "columns": best_of(lambda: edc.classify_columns(*cols, out=out), args.repeat),
-        }))
-        return
-
-    # Every baseline computes qrm's labels, checked on the whole input before timing.
+def measure(threads: int, n: int, repeat: int) -> Dict[str, Dict[str, float]]:
+    """Runs in a process whose pools are pinned to `threads`: every implementation of that
+    thread count checked against qrm's labels, then interleaved rounds, best wall and best
+    CPU seconds each."""
     try:
         import qrm
-
-        truth = qrm.Calculus.builtin("edc").classify(t)
     except ImportError:
         sys.exit("install the qrm wheel into this venv: the baselines are checked against it")
-    kernels: Dict[str, Callable[[], object]] = {
-        "numpy-naive": lambda: edc_naive(t),
-        "numpy-lut": lambda: edc_lut(t, out),
-    }
+    if qrm.worker_threads() != threads:
+        sys.exit(f"qrm's pool has {qrm.worker_threads()} threads, not {threads}")
+    nb = numba_kernels()
+    if not nb:
+        sys.exit("numba is not installed in this venv: the fair baseline is numba")
+    t = triplets(n)
     cols = [np.ascontiguousarray(t[:, j]) for j in range(6)]
-    for name, k in numba_kernels().items():
+    out = np.empty(n, dtype=np.int64)
+    edc = qrm.Calculus.builtin("edc")
+    truth = edc.classify(t)
+    jobs: Dict[str, Callable[[], object]] = {}
+    if threads == 1:
+        jobs["numpy-naive"] = lambda: edc_naive(t)
+        jobs["numpy-lut"] = lambda: edc_lut(t, out)
+    for name, k in nb.items():
+        if name.startswith("numba-parallel") != (threads > 1):
+            continue
         if name.endswith("columns"):
-            kernels[name] = lambda k=k: k(*cols, out)
+            jobs[name] = lambda k=k: k(*cols, out)  # type: ignore[misc]
         else:
-            kernels[name] = lambda k=k: k(t, out)
-    for name, k in kernels.items():
-        got = k()
+            jobs[name] = lambda k=k: k(t, out)  # type: ignore[misc]
+    for name, job in jobs.items():
+        got = job()
         got = out if got is None else got
         wrong = int(np.count_nonzero(got != truth))
         if wrong:
-            sys.exit(f"{name} disagrees with qrm on {wrong} of {args.n} triplets: no comparison")
-    print(f"all {len(kernels)} baselines give qrm's state on each of {args.n:,} triplets")
+            sys.exit(f"{name} disagrees with qrm on {wrong} of {n} triplets: no comparison")
+    plural = "s" if threads > 1 else ""
+    jobs[f"qrm rows, {threads} thread{plural}"] = lambda: edc.classify(t, out=out)
+    jobs[f"qrm columns, {threads} thread{plural}"] = lambda: edc.classify_columns(*cols, out=out)
+    jobs["memory read (bound)"] = lambda: t.sum()
+    best = {name: {"wall": float("inf"), "cpu": float("inf")} for name in jobs}
+    for f in jobs.values():
+        f()  # warm-up (numba's compile, qrm's pool)
+    for _ in range(repeat):
+        for name, f in jobs.items():
+            w0, c0 = time.perf_counter(), time.process_time()
+            f()
+            c1, w1 = time.process_time(), time.perf_counter()
+            best[name]["wall"] = min(best[name]["wall"], w1 - w0)
+            best[name]["cpu"] = min(best[name]["cpu"], c1 - c0)
+    return best
 
-    times = {name: best_of(k, args.repeat) for name, k in kernels.items()}
-    times.update(qrm_times(args.n, args.repeat))
-    bound = best_of(lambda: t.sum(), args.repeat)
-    ns = {name: s / args.n * 1e9 for name, s in times.items()}
-    bound_ns = bound / args.n * 1e9
-    q1 = ns.get("qrm rows (1 thread)")
-    print(f"\n{'implementation':<22} {'ns/triplet':>10} {'÷ qrm 1 thread':>15}")
-    for name, v in ns.items():
-        print(f"{name:<22} {v:10.2f} {(f'{v / q1:.2f}' if q1 else '-'):>15}")
-    print(f"{'memory read (bound)':<22} {bound_ns:10.2f} {(f'{bound_ns / q1:.2f}' if q1 else '-'):>15}")
-    print(f"\nbest of {args.repeat} runs each; numpy and numba on one thread, numba-parallel and "
-          f"the last qrm row on every core; qrm through the wheel (classify with out=).")
+
+def strongest(best: Dict[str, Dict[str, float]], columns: bool) -> str:
+    """The fastest baseline of one layout by wall time (the NumPy ones read rows)."""
+    baselines = [k for k in best if not k.startswith("qrm") and "bound" not in k
+                 and k.endswith("columns") == columns]
+    return min(baselines, key=lambda k: best[k]["wall"])
+
+
+def report(threads: int, n: int, best: Dict[str, Dict[str, float]]) -> str:
+    plural = "s" if threads > 1 else ""
+    lines = [f"\n{threads} thread{plural} (best of the rounds; ns per triplet)",
+             f"{'implementation':<26} {'wall':>8} {'CPU':>8}"]
+    for name, t in best.items():
+        lines.append(f"{name:<26} {t['wall'] / n * 1e9:8.2f} {t['cpu'] / n * 1e9:8.2f}")
+    for layout, columns in (("rows", False), ("columns", True)):
+        ours = f"qrm {layout}, {threads} thread{plural}"
+        top = strongest(best, columns)
+        lines.append(f"qrm {layout} against the strongest baseline of its layout ({top}): "
+                     f"{best[top]['wall'] / best[ours]['wall']:.2f}x by wall time, "
+                     f"{best[top]['cpu'] / best[ours]['cpu']:.2f}x by CPU time")
+    return "\n".join(lines)
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--n", type=int, default=10_000_000)
+    ap.add_argument("--repeat", type=int, default=5, help="interleaved rounds (best of)")
+    ap.add_argument("--threads", default=f"1,{os.cpu_count() or 1}", help="thread counts, one process each")
+    ap.add_argument("--json", help="also write the best times (seconds) here")
+    ap.add_argument("--child", type=int, help=argparse.SUPPRESS)
+    args = ap.parse_args()
+    if args.repeat < 1 or args.n < 1:
+        sys.exit("--repeat and --n must be at least 1")
+    if args.child is not None:
+        print(json.dumps(measure(args.child, args.n, args.repeat)))
+        return
+    try:
+        counts = sorted({int(v) for v in args.threads.split(",")})
+    except ValueError:
+        sys.exit(f"--threads: comma-separated thread counts, got {args.threads!r}")
+    if any(t < 1 for t in counts):
+        sys.exit("--threads: counts of at least 1")
+    print(f"every baseline gives qrm's state on each of {args.n:,} triplets (checked before timing); "
+          f"{args.repeat} interleaved rounds")
+    res: Dict[str, Dict[str, Dict[str, float]]] = {}
+    for t in counts:
+        env = dict(os.environ, RAYON_NUM_THREADS=str(t), NUMBA_NUM_THREADS=str(t), OMP_NUM_THREADS="1",
+                   OPENBLAS_NUM_THREADS="1")
+        run = subprocess.run([sys.executable, __file__, "--child", str(t), "--n", str(args.n),
+                              "--repeat", str(args.repeat)], env=env, capture_output=True, text=True)
+        if run.returncode != 0:
+            sys.exit(f"{t} thread(s): {run.stderr.strip() or run.stdout.strip()}")
+        best = json.loads(run.stdout.strip().splitlines()[-1])
+        res[str(t)] = best
+        print(report(t, args.n, best))
+    if args.json:
+        with open(args.json, "w", encoding="utf-8") as f:
+            json.dump(res, f, indent=1)
 
 
 if __name__ == "__main__":

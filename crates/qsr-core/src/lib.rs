@@ -77,6 +77,7 @@ mod derived;
 mod describe;
 mod error;
 mod frame;
+mod fused;
 mod merge;
 mod neighbours;
 mod partition;
