@@ -323,3 +323,43 @@ fn variant_names_agree_in_json_and_files() {
         );
     }
 }
+
+/// Regression (issue 36): a map of the thesis's size can be too sparse to plan in. Seed 6's
+/// world mapped with ids recognised in at least 5 scans has no start/goal pair that plans in
+/// 3,000 draws; the experiment refused the whole run ("the map … is too sparse to plan in").
+/// Now the world is reported with the pairs it found — none — and no success rate (not 0 %).
+#[test]
+fn a_world_too_sparse_to_plan_in_is_reported_not_refused() {
+    use studies::Study;
+    use studies::qlink::field::FieldExperiment;
+    let config = FieldParams {
+        trials: 3,
+        worlds: 1,
+        min_landmark_scans: 5,
+        ..FieldParams::quick(6)
+    };
+    let out = FieldExperiment::run(&config, &|| {}).unwrap();
+    let world = &out.worlds[0];
+    assert_eq!(world.draws.wanted, 3);
+    // the counts the refusal used to name: 149 starts blocked, 639 goals in view, 1,030
+    // starts in no element, 1,182 pairs with no link-graph path
+    assert_eq!(world.draws.kept, 0, "{:?}", world.draws);
+    assert_eq!(world.draws.no_path, 1182, "{:?}", world.draws);
+    assert!(world.draws.short());
+    assert!(world.trials.is_empty());
+    let report = FieldExperiment::report(&config, &out);
+    let maps = report.table("maps").unwrap();
+    let pairs = maps.columns.iter().position(|c| c.key == "pairs").unwrap();
+    assert_eq!(maps.rows[0][pairs].text, "0 of 3");
+    for r in &out.success_rate_over_worlds {
+        assert_eq!(r.worlds, 0, "a world with no trials has no rate");
+    }
+    let per_world = report.table("success_per_world").unwrap();
+    for row in &per_world.rows {
+        assert!(
+            row[1..].iter().all(|c| c.csv.is_empty()),
+            "no rate shown where none was measured: {row:?}"
+        );
+    }
+    assert!(!serde_json::to_string(&out).unwrap().contains("NaN"));
+}

@@ -399,6 +399,8 @@ class TaskDraws(TypedDict):
     no_path: int
     trivial: int
     blocked: int
+    wanted: int
+    """pairs asked for: more than `kept` when the map was too sparse to find them all"""
 
 
 FieldResult: TypeAlias = Union[

@@ -87,9 +87,11 @@ pub fn aggregate(config: &FieldParams, shards: Vec<(usize, FieldWorld)>) -> Resu
     let success_rate_over_worlds = variants
         .iter()
         .map(|&v| {
+            // a world whose map gave no pair to try has no rate (not a rate of 0)
             let rates: Vec<f64> = worlds
                 .iter()
                 .filter_map(|w| w.variants.iter().find(|s| s.variant == v))
+                .filter(|s| s.judged() > 0)
                 .map(|s| s.success_rate)
                 .collect();
             let s = MeanSd::of(&rates);
@@ -97,6 +99,7 @@ pub fn aggregate(config: &FieldParams, shards: Vec<(usize, FieldWorld)>) -> Resu
                 variant: v,
                 mean: s.mean,
                 sd: s.sd,
+                worlds: s.n,
             }
         })
         .collect();

@@ -43,6 +43,9 @@ pub struct VariantRate {
     pub mean: f64,
     /// Their sample standard deviation (0 for one world).
     pub sd: f64,
+    /// Worlds with a rate: those whose map gave the variant a pair to try.
+    #[serde(default)]
+    pub worlds: usize,
 }
 
 /// What a run of the field experiment produced.

@@ -87,6 +87,7 @@ fn maps_table(config: &FieldParams, worlds: &[FieldWorld]) -> Table {
             Column::new("effective_range", "effective range (m)"),
             Column::new("aliased_detections", "mapping detections on another object"),
             Column::new("detections", "mapping detections"),
+            Column::new("pairs", "start/goal pairs found (of those asked)"),
         ],
     )
     .caption(format!(
@@ -98,7 +99,9 @@ fn maps_table(config: &FieldParams, worlds: &[FieldWorld]) -> Table {
          recognised landmarks. The walls are recognised from the scans (two long parallel \
          wall candidates a corridor's width apart); the frame error is the mean distance of \
          the frame points the drive's scans placed from the true ones. Rays on the ground: \
-         the share of the drive's lidar rays that met the pitched terrain.",
+         the share of the drive's lidar rays that met the pitched terrain. Pairs: the \
+         start/goal tasks found in 1,000 draws per task asked; a world whose map is too sparse \
+         to plan in runs the ones it found, and one with none has no success rate.",
         config.sigma,
         config.tolerance,
         config.min_votes,
@@ -121,6 +124,7 @@ fn maps_table(config: &FieldParams, worlds: &[FieldWorld]) -> Table {
             Cell::number(s.effective_range, 1),
             Cell::int(s.aliased_detections as u64),
             Cell::int(s.detections as u64),
+            Cell::text(format!("{} of {}", w.draws.kept, w.draws.wanted)),
         ]);
     }
     t
@@ -144,12 +148,13 @@ fn per_world_table(output: &FieldOutput) -> Table {
     for r in &output.success_rate_over_worlds {
         let mut row = vec![Cell::text(r.variant.name())];
         row.extend(output.worlds.iter().map(|w| {
-            Cell::maybe(summary_of(w, r.variant), |s| {
+            Cell::maybe(summary_of(w, r.variant).filter(|s| s.judged() > 0), |s| {
                 Cell::percent(s.success_rate, 1)
             })
         }));
-        row.push(Cell::percent(r.mean, 1));
-        row.push(Cell::percent(r.sd, 1));
+        let rated = (r.worlds > 0).then_some(r);
+        row.push(Cell::maybe(rated, |r| Cell::percent(r.mean, 1)));
+        row.push(Cell::maybe(rated, |r| Cell::percent(r.sd, 1)));
         t.push(row);
     }
     t

@@ -39,6 +39,14 @@ pub struct FieldSummary {
     pub by_plan_len: Vec<(usize, usize, f64)>,
 }
 
+impl FieldSummary {
+    /// Trials judged for success: those that found a path to try.
+    #[must_use]
+    pub fn judged(&self) -> usize {
+        self.trials - self.no_path
+    }
+}
+
 /// Summaries per variant, in the order given.
 #[must_use]
 pub fn summarise(trials: &[FieldTrial], variants: &[FieldVariant]) -> Vec<FieldSummary> {
