@@ -313,13 +313,21 @@ fn field_worlds_merge_in_any_order_into_the_run() {
     assert_eq!(report.figures.len(), 2);
 }
 
-/// Files name a variant one way: the CSV/report name is the JSON name.
+/// Files name a variant and a result one way: the CSV/report name is the JSON name
+/// (regression: a result "insufficient-features+aliasing" in files was
+/// "insufficient-features-and-aliasing" in the JSON and in Python's `FieldResult`).
 #[test]
-fn variant_names_agree_in_json_and_files() {
+fn variant_and_result_names_agree_in_json_and_files() {
     for v in FieldVariant::ALL {
         assert_eq!(
             serde_json::to_value(v).unwrap(),
             serde_json::Value::String(v.name().to_owned())
+        );
+    }
+    for r in FieldResult::ALL {
+        assert_eq!(
+            serde_json::to_value(r).unwrap(),
+            serde_json::Value::String(r.name().to_owned())
         );
     }
 }

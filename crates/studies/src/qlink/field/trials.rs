@@ -50,14 +50,25 @@ pub enum FieldResult {
 }
 
 impl FieldResult {
-    /// Its name in files.
+    /// Every result, in declaration order.
+    pub const ALL: [FieldResult; 5] = [
+        Self::Success,
+        Self::PerceptualAliasing,
+        Self::InsufficientFeatures,
+        Self::InsufficientFeaturesAndAliasing,
+        Self::NoPath,
+    ];
+
+    /// Its name in files: the JSON's (until 2026-11-28 the files said
+    /// "insufficient-features+aliasing" where the JSON and Python's `FieldResult` say
+    /// "insufficient-features-and-aliasing").
     #[must_use]
     pub fn name(self) -> &'static str {
         match self {
             Self::Success => "success",
             Self::PerceptualAliasing => "perceptual-aliasing",
             Self::InsufficientFeatures => "insufficient-features",
-            Self::InsufficientFeaturesAndAliasing => "insufficient-features+aliasing",
+            Self::InsufficientFeaturesAndAliasing => "insufficient-features-and-aliasing",
             Self::NoPath => "no-path",
         }
     }
