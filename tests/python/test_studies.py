@@ -136,7 +136,7 @@ def test_the_field_and_serge_studies_run_from_python_typed(name, changes, table)
     report = run["report"]
     assert any(t["name"] == table for t in report["tables"])
     assert report["claims"] and all(
-        c["verdict"] in ("agree", "disagree", "holds", "violated") for c in report["claims"]
+        c["verdict"] in ("agree", "disagree", "holds", "violated", "not-judged") for c in report["claims"]
     )
     kinds = {f["plot"]["kind"] for f in report["figures"]}
     assert kinds & {"site", "regions"}, kinds

@@ -23,6 +23,10 @@ pub enum Verdict {
     /// Such a property fails in our runs (a proof's assumptions do not hold, a claim of ours
     /// is not borne out, or a bug).
     Violated,
+    /// Nothing to judge by: the claim is over cases this run has none of (no trial ran, no
+    /// success to measure, no run whose assumptions hold). A claim over nothing is neither
+    /// borne out nor refuted — "0 of 0 exceed the bound" is not an agreement.
+    NotJudged,
 }
 
 impl Verdict {
@@ -38,7 +42,21 @@ impl Verdict {
         if holds { Self::Holds } else { Self::Violated }
     }
 
-    /// "agree", "disagree", "holds", "violated".
+    /// This verdict, judged over `cases` cases: [`Verdict::NotJudged`] when there are none.
+    /// Every claim over a pool that a run can leave empty states its verdict through this,
+    /// so that an empty pool is never a vacuous agreement (nor a disagreement).
+    ///
+    /// ```
+    /// use studies::Verdict;
+    /// assert_eq!(Verdict::agree_if(true).over(0), Verdict::NotJudged);
+    /// assert_eq!(Verdict::agree_if(true).over(3), Verdict::Agree);
+    /// ```
+    #[must_use]
+    pub fn over(self, cases: usize) -> Self {
+        if cases == 0 { Self::NotJudged } else { self }
+    }
+
+    /// "agree", "disagree", "holds", "violated", "not-judged" (as in the JSON).
     #[must_use]
     pub fn as_str(self) -> &'static str {
         match self {
@@ -46,6 +64,7 @@ impl Verdict {
             Self::Disagree => "disagree",
             Self::Holds => "holds",
             Self::Violated => "violated",
+            Self::NotJudged => "not-judged",
         }
     }
 }

@@ -370,4 +370,18 @@ fn a_world_too_sparse_to_plan_in_is_reported_not_refused() {
         );
     }
     assert!(!serde_json::to_string(&out).unwrap().contains("NaN"));
+    // a claim over no trials is not judged: "0 of 0 trajectories exceed Proposition 2's bound"
+    // was an agreement, and "0 of 0 (0.0 %)" a disagreement; only the map's size, measured
+    // on the world itself, has something to judge
+    for c in &report.claims {
+        let on_the_map = c.what.starts_with("the field map's");
+        assert_eq!(
+            c.verdict == studies::Verdict::NotJudged,
+            !on_the_map,
+            "{}: {} ({:?})",
+            c.what,
+            c.ours,
+            c.verdict
+        );
+    }
 }

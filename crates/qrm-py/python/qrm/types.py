@@ -488,7 +488,13 @@ class FieldExperiment(TypedDict):
 
 # --- studies (`qrm.studies`): the report every study returns --------------------------------
 
-StudyVerdict: TypeAlias = Union[Literal["agree"], Literal["disagree"], Literal["holds"], Literal["violated"]]
+StudyVerdict: TypeAlias = Union[
+    Literal["agree"],
+    Literal["disagree"],
+    Literal["holds"],
+    Literal["violated"],
+    Literal["not-judged"],
+]
 
 
 class ReportClaim(TypedDict):

@@ -440,7 +440,7 @@ fn hallway_claims(h: &DatasetResult, output: &SergeOutput) -> Vec<Claim> {
             what: "a learned calculus classifies as its map".into(),
             thesis: "the SR map is the calculus (§3.3.2)".into(),
             ours: format!("{} of {} points differ", l.mismatches, l.points),
-            verdict: Verdict::holds_if(l.mismatches == 0),
+            verdict: Verdict::holds_if(l.mismatches == 0).over(l.points),
             why: String::new(),
         });
         c.push(Claim {
@@ -450,7 +450,7 @@ fn hallway_claims(h: &DatasetResult, output: &SergeOutput) -> Vec<Claim> {
                 "{} of {} sampled entries missing",
                 l.missing, l.sampled_entries
             ),
-            verdict: Verdict::holds_if(l.missing == 0),
+            verdict: Verdict::holds_if(l.missing == 0).over(l.sampled_entries),
             why: String::new(),
         });
     }

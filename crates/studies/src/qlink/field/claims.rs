@@ -90,7 +90,7 @@ pub(super) fn claims(output: &FieldOutput) -> Vec<Claim> {
             100.0 * hi
         ),
         ours: format!("{k} of {n} ({:.1} %)", 100.0 * ours.success_rate),
-        verdict: Verdict::agree_if(n > 0 && (lo..=hi).contains(&ours.success_rate)),
+        verdict: Verdict::agree_if((lo..=hi).contains(&ours.success_rate)).over(n),
         why: "agree when ours lies in the Wilson 95 % interval of the thesis's 18 trials".into(),
     });
     let insufficient = ours.insufficient_features + ours.insufficient_features_and_aliasing;
@@ -110,7 +110,7 @@ pub(super) fn claims(output: &FieldOutput) -> Vec<Claim> {
             ours.insufficient_features_and_aliasing,
             ours.perceptual_aliasing
         ),
-        verdict: Verdict::agree_if(insufficient > ours.perceptual_aliasing),
+        verdict: Verdict::agree_if(insufficient > ours.perceptual_aliasing).over(n - k),
         why: String::new(),
     });
     claims.push(ground_claim(
@@ -155,7 +155,7 @@ fn table_4_2_claim(ours: &[(usize, usize, f64)]) -> Claim {
         } else {
             format!("successes at {} |P| value(s) ({ours_series})", means.len())
         },
-        verdict: Verdict::agree_if(judged && t_ours == t_theirs),
+        verdict: Verdict::agree_if(judged && t_ours == t_theirs).over(ours.len()),
         why: if !judged {
             "fewer than two |P| values among the successes: no trend to compare".into()
         } else if t_ours == t_theirs {
@@ -200,7 +200,7 @@ fn bound_claims(output: &FieldOutput) -> Vec<Claim> {
                      driven in transitions alone); its assumptions hold for {applies}",
                     successes.len()
                 ),
-                verdict: Verdict::agree_if(over == 0),
+                verdict: Verdict::agree_if(over == 0).over(successes.len()),
                 why: if over == 0 {
                     String::new()
                 } else {
@@ -224,7 +224,7 @@ fn bound_claims(output: &FieldOutput) -> Vec<Claim> {
             "{contradictions} runs exceed a bound whose assumptions hold ({applied} run-bounds \
              applied, every variant, both R)"
         ),
-        verdict: Verdict::holds_if(contradictions == 0),
+        verdict: Verdict::holds_if(contradictions == 0).over(applied),
         why: String::new(),
     });
     claims
@@ -267,7 +267,7 @@ fn improvement_claims(output: &FieldOutput, base: &FieldSummary) -> Vec<Claim> {
             what: format!("{} raises the success rate", variant.name()),
             thesis: thesis.into(),
             ours,
-            verdict: Verdict::agree_if(agree),
+            verdict: Verdict::agree_if(agree).over(n0.min(n1)),
             why: if better {
                 String::new()
             } else {
@@ -314,7 +314,7 @@ fn replanning_claim(ours: &FieldSummary) -> Claim {
             ours.successes,
             100.0 * share
         ),
-        verdict: Verdict::agree_if(ours.successes > 0 && (lo..=hi).contains(&share)),
+        verdict: Verdict::agree_if((lo..=hi).contains(&share)).over(ours.successes),
         why: String::new(),
     }
 }
@@ -356,7 +356,7 @@ fn ground_claim(trials: &[(FieldResult, f64)]) -> Claim {
             )
         }
         _ => (
-            Verdict::Disagree,
+            Verdict::Disagree.over(failed.len().min(ok.len())),
             format!(
                 "{} runs failed for insufficient features, {} succeeded: too few to compare",
                 failed.len(),
@@ -450,7 +450,7 @@ fn table_4_2_magnitude(successes: &[(usize, f64, f64)]) -> Claim {
             THESIS_TABLE_4_2.len(),
             rows.join(", ")
         ),
-        verdict: Verdict::agree_if(within == THESIS_TABLE_4_2.len()),
+        verdict: Verdict::agree_if(within == THESIS_TABLE_4_2.len()).over(successes.len()),
         why: if within == THESIS_TABLE_4_2.len() {
             String::new()
         } else {
@@ -512,7 +512,7 @@ fn rise_claim(ours: &[(usize, usize, f64)]) -> Claim {
         ),
         thesis: phrase(theirs),
         ours: phrase(mine),
-        verdict: Verdict::agree_if(mine.is_some_and(across)),
+        verdict: Verdict::agree_if(mine.is_some_and(across)).over(ours.len()),
         why: String::new(),
     }
 }
@@ -636,7 +636,12 @@ mod tests {
             .chain(spread(0.20, 80).map(|g| (S, g)))
             .collect();
         assert_eq!(ground_claim(&less).verdict, Verdict::Disagree);
-        assert_eq!(ground_claim(&[(F, 0.3)]).verdict, Verdict::Disagree);
+        // one of each is too few to compare; no success at all is nothing to compare with
+        assert_eq!(
+            ground_claim(&[(F, 0.3), (S, 0.1)]).verdict,
+            Verdict::Disagree
+        );
+        assert_eq!(ground_claim(&[(F, 0.3)]).verdict, Verdict::NotJudged);
     }
 
     #[test]
@@ -737,7 +742,9 @@ mod tests {
         assert_eq!(replanning_claim(&with(100, 38)).verdict, Verdict::Agree);
         assert_eq!(replanning_claim(&with(100, 10)).verdict, Verdict::Disagree);
         assert_eq!(replanning_claim(&with(100, 80)).verdict, Verdict::Disagree);
-        assert_eq!(replanning_claim(&with(0, 0)).verdict, Verdict::Disagree);
+        // no success: nothing to take a share of — not judged (it said "disagree", and the
+        // bounds' "0 of 0 exceed it" said "agree")
+        assert_eq!(replanning_claim(&with(0, 0)).verdict, Verdict::NotJudged);
     }
 
     #[test]

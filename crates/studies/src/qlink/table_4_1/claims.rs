@@ -58,7 +58,7 @@ pub fn claims(
                 b.failures,
                 b.pairs - b.no_path
             ),
-            verdict: Verdict::holds_if(b.failures == 0),
+            verdict: Verdict::holds_if(b.failures == 0).over(b.pairs - b.no_path),
             why: if b.failures == 0 {
                 String::new()
             } else {
@@ -160,7 +160,7 @@ fn bound_claims(rows: &[TableRow]) -> Vec<Claim> {
                     "{trajectory} of {successes} successful trajectories exceed it ({transit} by \
                      the length driven in transitions alone)"
                 ),
-                verdict: Verdict::holds_if(trajectory == 0),
+                verdict: Verdict::holds_if(trajectory == 0).over(successes),
                 why: if trajectory == 0 {
                     String::new()
                 } else {
