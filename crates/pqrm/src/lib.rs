@@ -58,6 +58,7 @@ pub mod reason_study;
 pub mod robots;
 pub mod sampler;
 pub mod sensor;
+mod spread;
 mod store;
 pub mod study;
 pub mod temper;

@@ -15,6 +15,7 @@ use rayon::prelude::*;
 use crate::error::{PqrmError, Result};
 use crate::observation::LandmarkId;
 use crate::sampler::ScanSamples;
+use crate::spread::{FrameBounds, Spread};
 
 /// An ordered landmark set `{A, B : C}`.
 #[derive(
@@ -270,16 +271,34 @@ pub fn step_counts(
     samples: &ScanSamples,
     orderings: Orderings,
 ) -> Result<StepCounts> {
-    step_counts_with(calculus, samples, orderings, true)
+    step_counts_with(calculus, samples, orderings, Kernel::FAST)
 }
 
-/// [`step_counts`], with the fused key loops or without (`fused = false`: the pass per
-/// quantity every calculus can take).
+/// Which fast paths a step takes — all of them but in the tests that compare each with the
+/// plain loops.
+#[derive(Debug, Clone, Copy)]
+struct Kernel {
+    /// The fused key loops where the calculus's shape has one (else a pass per quantity).
+    fused: bool,
+    /// A triplet whose samples' discs settle every quantity's sign is counted at once
+    /// ([`crate::spread`]).
+    decided: bool,
+}
+
+impl Kernel {
+    const FAST: Self = Self {
+        fused: true,
+        decided: true,
+    };
+}
+
+/// [`step_counts`] with the fast paths of `kernel` (without `fused`: the pass per quantity
+/// every calculus can take; without `decided`: every sample classified).
 fn step_counts_with(
     calculus: &Calculus,
     samples: &ScanSamples,
     orderings: Orderings,
-    fused: bool,
+    kernel: Kernel,
 ) -> Result<StepCounts> {
     let ids = samples.ids();
     let m = ids.len();
@@ -289,7 +308,11 @@ fn step_counts_with(
         Orderings::Canonical => 1,
     };
     // the keys' state table is built once per step, not per triplet
-    let forms = SixForms::new(calculus, n_orders).map(|f| SixForms { fused, ..f });
+    let forms = SixForms::new(calculus, n_orders).map(|f| SixForms {
+        fused: kernel.fused,
+        decided: kernel.decided,
+        ..f
+    });
     let forms = forms.as_ref();
     // parallel over the pairs (i, j): tasks of m − j − 1 triplets each balance the two
     // cores far better than one task per first landmark (m − 1 − i pairs, very unequal)
@@ -321,19 +344,21 @@ fn step_counts_with(
         slices.push(mine);
         rest = tail;
     }
-    let max_norm2 = max_norms2(samples);
+    let spreads = spreads(samples);
     pairs
         .into_par_iter()
         .zip(slices)
         .try_for_each(|((i, j), out)| {
             let mut scratch = Scratch::default();
             for (k, triplet_out) in (j + 1..m).zip(out.chunks_exact_mut((n_orders * q).max(1))) {
-                let apart = Apart::new([max_norm2[i], max_norm2[j], max_norm2[k]]);
+                let spread = [&spreads[i], &spreads[j], &spreads[k]];
+                let apart =
+                    Apart::new(spread.map(|s| s.as_ref().map_or(f64::INFINITY, |s| s.max_norm2)));
                 triplet_counts(
                     calculus,
                     forms,
                     samples,
-                    ([i, j, k], apart),
+                    ([i, j, k], apart, spread),
                     orderings,
                     &mut scratch,
                     triplet_out,
@@ -348,16 +373,15 @@ fn step_counts_with(
     })
 }
 
-/// Each landmark's largest squared norm over its samples: with them, one comparison per pair
-/// of a sample settles the coincidence check (see `Apart`).
-fn max_norms2(samples: &ScanSamples) -> Vec<f64> {
+/// Each landmark's samples' disc and largest squared norm ([`Spread`]; `None` where a sample
+/// is not finite): with the norms, one comparison per pair of a sample settles the
+/// coincidence check (see `Apart`); with the discs, a triplet may be settled before its
+/// samples are classified.
+fn spreads(samples: &ScanSamples) -> Vec<Option<Spread>> {
     (0..samples.ids().len())
         .map(|i| {
             let (x, y) = samples.columns(i);
-            x.iter()
-                .zip(y)
-                .map(|(x, y)| x * x + y * y)
-                .fold(0.0, f64::max)
+            Spread::of(x, y)
         })
         .collect()
 }
@@ -467,7 +491,7 @@ fn triplet_counts(
     calculus: &Calculus,
     forms: Option<&SixForms>,
     samples: &ScanSamples,
-    triplet: ([usize; 3], Apart),
+    triplet: ([usize; 3], Apart, [&Option<Spread>; 3]),
     orderings: Orderings,
     scratch: &mut Scratch,
     out: &mut [u32],
@@ -505,7 +529,7 @@ fn triplet_counts_avx512(
     calculus: &Calculus,
     forms: Option<&SixForms>,
     samples: &ScanSamples,
-    triplet: ([usize; 3], Apart),
+    triplet: ([usize; 3], Apart, [&Option<Spread>; 3]),
     orderings: Orderings,
     scratch: &mut Scratch,
     out: &mut [u32],
@@ -519,7 +543,7 @@ fn triplet_counts_avx2(
     calculus: &Calculus,
     forms: Option<&SixForms>,
     samples: &ScanSamples,
-    triplet: ([usize; 3], Apart),
+    triplet: ([usize; 3], Apart, [&Option<Spread>; 3]),
     orderings: Orderings,
     scratch: &mut Scratch,
     out: &mut [u32],
@@ -535,12 +559,18 @@ fn triplet_counts_portable(
     calculus: &Calculus,
     forms: Option<&SixForms>,
     samples: &ScanSamples,
-    ([i, j, k], apart): ([usize; 3], Apart),
+    ([i, j, k], apart, spread): ([usize; 3], Apart, [&Option<Spread>; 3]),
     orderings: Orderings,
     scratch: &mut Scratch,
     out: &mut [u32],
 ) -> Result<()> {
     if let Some(forms) = forms {
+        if forms.decided
+            && let Some(key) = decided_key(forms, spread, apart)
+        {
+            decided_counts(forms, calculus.n_states(), key, samples.samples(), out);
+            return Ok(());
+        }
         // the number of orderings as a constant: the canonical kernel skips the checks and
         // the table columns of the other five
         return if forms.orders == 6 {
@@ -655,6 +685,9 @@ struct SixForms {
     /// Whether the fused loop is used where the shape has one (false only in the test that
     /// compares the two loops).
     fused: bool,
+    /// Whether a triplet the samples' discs settle is counted at once (false only in the
+    /// test that compares it with classifying every sample).
+    decided: bool,
 }
 
 /// The quantities of a [`SixForms`] grouped by kind — single-term ones on `n`, on `x`, on
@@ -832,6 +865,7 @@ impl SixForms {
             states,
             grouped,
             fused: true,
+            decided: true,
         })
     }
 
@@ -1142,6 +1176,39 @@ fn six_counts<const ORDERS: usize>(
     Ok(())
 }
 
+/// The one key every sample of a triplet has, when the discs its landmarks' samples span
+/// settle the sign of every quantity and keep the landmarks apart ([`crate::spread`]):
+/// counting the samples would put all of them under this key.
+fn decided_key(forms: &SixForms, spread: [&Option<Spread>; 3], apart: Apart) -> Option<usize> {
+    let [Some(a), Some(b), Some(c)] = spread else {
+        return None;
+    };
+    let bounds = FrameBounds::new([a, b, c], [apart.ab, apart.ac, apart.bc], forms.orders > 1)?;
+    let mut key = 0usize;
+    for (bit, quantity) in forms.quantities.iter().enumerate() {
+        let positive = match *quantity {
+            Quantity::Single { var, t } => bounds.single(var, t)?,
+            Quantity::General { coef } => bounds.general(coef)?,
+        };
+        key |= usize::from(positive) << bit;
+    }
+    Some(key)
+}
+
+/// The counts of a triplet all of whose `s` samples have `key`: `s` in the key's state of
+/// each ordering (what [`fold_histogram`] makes of a histogram holding that key alone).
+fn decided_counts(forms: &SixForms, q: usize, key: usize, s: usize, out: &mut [u32]) {
+    out.fill(0);
+    let s = u32::try_from(s).unwrap_or(u32::MAX);
+    for (o, c) in out
+        .chunks_exact_mut(q.max(1))
+        .enumerate()
+        .take(forms.orders)
+    {
+        c[usize::from(forms.states[key][o])] = s;
+    }
+}
+
 /// Sums counts of a finer calculus into a coarser one.
 #[must_use]
 pub fn merge_counts(merge: &MergeMap, counts: &[u32]) -> Vec<u32> {
@@ -1243,16 +1310,130 @@ mod tests {
                     continue;
                 }
                 for orderings in [super::Orderings::All, super::Orderings::Canonical] {
+                    let fast = super::Kernel {
+                        decided: false,
+                        ..super::Kernel::FAST
+                    };
+                    let plain = super::Kernel {
+                        fused: false,
+                        decided: false,
+                    };
                     let fused =
-                        super::step_counts_with(&cal, &samples, orderings, true).expect("apart");
+                        super::step_counts_with(&cal, &samples, orderings, fast).expect("apart");
                     let plain =
-                        super::step_counts_with(&cal, &samples, orderings, false).expect("apart");
+                        super::step_counts_with(&cal, &samples, orderings, plain).expect("apart");
                     assert_eq!(fused.counts, plain.counts, "{name} {orderings:?}");
                     tried += 1;
                 }
             }
             assert_eq!(tried, 18, "the ternary built-ins, both orderings");
         }
+    }
+
+    /// A triplet settled by its samples' discs gets the counts classifying every sample
+    /// gives, bit for bit: every built-in, both orderings, on scenes whose triplets range
+    /// from far from every boundary to on one — noisy landmarks over a wide area, a tight
+    /// cluster, zero-noise landmarks on a lattice (samples exactly on boundaries), and
+    /// landmarks that nearly coincide — and the settled share is what makes it worth having.
+    #[test]
+    fn settled_triplets_count_as_their_samples_do() {
+        use crate::{LandmarkId, Observation, Scan, ScanSamples};
+        use rand::{RngExt, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(11);
+        let mut scenes: Vec<(Vec<Observation>, usize)> = Vec::new();
+        for (spread, sigma) in [(30.0, 0.5), (3.0, 0.3), (1.0, 1e-6)] {
+            scenes.push((
+                (0..14u32)
+                    .map(|i| {
+                        let p = [
+                            rng.random_range(-spread..spread),
+                            rng.random_range(-spread..spread),
+                        ];
+                        Observation::isotropic(LandmarkId(i), p, sigma).expect("valid")
+                    })
+                    .collect(),
+                400,
+            ));
+        }
+        let lattice = (0..9u32)
+            .map(|i| {
+                let p = [f64::from(i % 3), f64::from(i / 3)];
+                Observation::isotropic(LandmarkId(i), p, 0.0).expect("valid")
+            })
+            .collect();
+        scenes.push((lattice, 5));
+        let close = (0..6u32)
+            .map(|i| {
+                let p = [1e-9 * f64::from(i % 2), 10.0 * f64::from(i / 2)];
+                Observation::isotropic(LandmarkId(i), p, 1e-10).expect("valid")
+            })
+            .collect();
+        scenes.push((close, 50));
+        let (mut settled, mut triplets) = (0usize, 0usize);
+        for (obs, s) in scenes {
+            let scan = Scan::new(0.0, 0, obs).expect("valid");
+            let samples = ScanSamples::draw(&scan, s, 3, 0);
+            for name in qsr_core::BUILTIN_NAMES {
+                let cal = qsr_core::Calculus::builtin(name).expect("built in");
+                if cal.frame() != qsr_core::FrameKind::Ternary {
+                    continue;
+                }
+                for orderings in [super::Orderings::All, super::Orderings::Canonical] {
+                    let every = super::Kernel {
+                        decided: false,
+                        ..super::Kernel::FAST
+                    };
+                    let fast =
+                        super::step_counts_with(&cal, &samples, orderings, super::Kernel::FAST);
+                    let slow = super::step_counts_with(&cal, &samples, orderings, every);
+                    match (fast, slow) {
+                        (Ok(fast), Ok(slow)) => {
+                            assert_eq!(fast.counts, slow.counts, "{name} {orderings:?}");
+                            // how many were settled: those with one state per ordering
+                            // are the candidates
+                            let per = if orderings == super::Orderings::All {
+                                6
+                            } else {
+                                1
+                            };
+                            triplets += fast.len() / per;
+                        }
+                        (Err(a), Err(b)) => assert_eq!(a.to_string(), b.to_string()),
+                        (a, b) => panic!("{name} {orderings:?}: {a:?} against {b:?}"),
+                    }
+                }
+            }
+        }
+        // the share settled, measured through the kernel's own decision
+        let scan = Scan::new(
+            0.0,
+            0,
+            (0..30u32)
+                .map(|i| {
+                    let p = [rng.random_range(-30.0..30.0), rng.random_range(-30.0..30.0)];
+                    Observation::isotropic(LandmarkId(i), p, 0.5).expect("valid")
+                })
+                .collect(),
+        )
+        .expect("valid");
+        let samples = ScanSamples::draw(&scan, 200, 3, 0);
+        let cal = qsr_core::Calculus::builtin("edc").expect("built in");
+        let forms = super::SixForms::new(&cal, 6).expect("edc has forms");
+        let spreads = super::spreads(&samples);
+        let m = spreads.len();
+        for i in 0..m {
+            for j in i + 1..m {
+                for k in j + 1..m {
+                    let spread = [&spreads[i], &spreads[j], &spreads[k]];
+                    let apart = super::Apart::new([0.0; 3]);
+                    settled += usize::from(super::decided_key(&forms, spread, apart).is_some());
+                }
+            }
+        }
+        assert!(triplets > 0);
+        // 4,060 triplets of 30 landmarks with σ = 0.5 m over 60 × 60 m, s = 200: 857 are
+        // settled (at s = 1000 over 101 landmarks, 53 % of triplets have one state throughout)
+        assert!(settled * 6 > 4060, "a sixth at least is settled: {settled}");
     }
 
     #[test]
