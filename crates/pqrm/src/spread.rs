@@ -12,9 +12,10 @@
 //! counts stay bit for bit what they were.
 //!
 //! The bound is the worst case of three independent discs (all three samples at their rims,
-//! aligned), looser than the samples' joint spread: it settles about half the triplets that
-//! are in one state throughout. Discs per chunk of samples were tried and settle too few
-//! more to pay for their checks.
+//! aligned), looser than the samples' joint spread: it settles 23 % of those EDC triplets
+//! (canonical), of the 53 % in one state throughout. Discs per chunk of samples, and the
+//! samples' own joint radius, settle more but cost as much as they save (measured; see
+//! docs/performance.md).
 //!
 //! **Rounding.** The kernel computes each sample's quantities in floating point, and the
 //! bounds here are computed in floating point too. Both err by at most a few units in the
