@@ -5,8 +5,8 @@ use qlink::Perception;
 use qsr_core::{Calculus, Point2, Segment};
 use rand::{RngExt, SeedableRng};
 use studies::qlink::field::{
-    FieldParams, FieldResult, FieldVariant, LidarPerception, WALL_FRAME_END, WALL_FRAME_START,
-    map_field, run_field, summarise, tasks, wall_calculus,
+    FieldElements, FieldParams, FieldResult, FieldVariant, LidarPerception, WALL_FRAME_END,
+    WALL_FRAME_START, map_field, run_field, summarise, tasks, wall_calculus,
 };
 
 /// The wall layer writes front / between / behind for a ternary frame over the walls'
@@ -97,6 +97,53 @@ fn the_lidar_only_map_is_a_hybrid_map_with_all_wall_states() {
         ["behind", "between", "front"],
         "posts in front, bollards between, trees and pines behind"
     );
+}
+
+/// Issue 36 §2: the thesis's field map is 44 elements over 25 landmarks. Keeping every
+/// triplet seen together grows with the cube of the landmarks in view; the default keeps
+/// neighbours (triangles of the scans' triangulations), a subset of those, about as many as
+/// one planar triangulation of the landmarks has.
+#[test]
+fn the_field_map_keeps_neighbours_not_every_triplet_in_view() {
+    let sets = |elements| {
+        let params = FieldParams {
+            elements,
+            ..FieldParams::quick(0)
+        };
+        let f = map_field(&params).unwrap();
+        let sets: std::collections::BTreeSet<Vec<u32>> = f
+            .map
+            .elements()
+            .iter()
+            .filter(|e| e.layer == 0)
+            .map(|e| {
+                let mut k = e.landmarks.to_vec();
+                k.sort_unstable();
+                k
+            })
+            .collect();
+        (sets, f.stats)
+    };
+    assert_eq!(FieldParams::quick(0).elements, FieldElements::Delaunay);
+    let (neighbours, s) = sets(FieldElements::Delaunay);
+    let (all, s_all) = sets(FieldElements::CoObserved);
+    assert!(neighbours.is_subset(&all));
+    // a landmark in no kept triangle is in no element
+    assert!(s.mapped_ids <= s_all.mapped_ids && s.mapped_ids + 10 > s_all.mapped_ids);
+    assert!(
+        neighbours.len() >= s.mapped_ids / 2 && neighbours.len() <= 2 * s.mapped_ids - 5,
+        "{} neighbour sets over {} landmarks",
+        neighbours.len(),
+        s.mapped_ids
+    );
+    assert!(
+        all.len() > 2 * s.mapped_ids,
+        "{} co-observed sets over {} landmarks",
+        all.len(),
+        s.mapped_ids
+    );
+    // every orientation of a kept set is recorded: six PQRM entries per set
+    assert_eq!(s.point_elements, 6 * neighbours.len());
 }
 
 #[test]
@@ -344,6 +391,8 @@ fn a_world_too_sparse_to_plan_in_is_reported_not_refused() {
         trials: 3,
         worlds: 1,
         min_landmark_scans: 5,
+        // the map the regression was found on (every triplet seen together)
+        elements: FieldElements::CoObserved,
         ..FieldParams::quick(6)
     };
     let out = FieldExperiment::run(&config, &|| {}).unwrap();

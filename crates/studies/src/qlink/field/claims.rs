@@ -3,10 +3,10 @@
 //! the map's size, Propositions 2 and 4, and the proposed improvements. The thesis's numbers
 //! are the constants here, nowhere else.
 
-use super::FieldVariant;
 use super::output::{FieldOutput, FieldWorld};
 use super::summary::{BoundRange, FieldSummary};
 use super::trials::{FieldResult, FieldTrial};
+use super::{FieldParams, FieldVariant};
 use crate::report::{Claim, Verdict};
 use crate::verdict::{Trend, two_proportion_z, wilson_interval};
 
@@ -71,7 +71,7 @@ fn attempts(s: &FieldSummary) -> (usize, usize) {
 }
 
 /// Every claim of a run.
-pub(super) fn claims(output: &FieldOutput) -> Vec<Claim> {
+pub(super) fn claims(config: &FieldParams, output: &FieldOutput) -> Vec<Claim> {
     let mut claims = Vec::new();
     let th = THESIS_IN_VIVO;
     let Some(ours) = output.pooled(FieldVariant::Thesis) else {
@@ -124,7 +124,7 @@ pub(super) fn claims(output: &FieldOutput) -> Vec<Claim> {
     claims.push(table_4_2_claim(&ours_by_plan_len(output)));
     claims.push(table_4_2_magnitude_claim(output));
     claims.push(rise_claim(&ours_by_plan_len(output)));
-    claims.extend(map_size_claims(output));
+    claims.extend(map_size_claims(config, output));
     claims.extend(bound_claims(output));
     claims.extend(improvement_claims(output, ours));
     claims
@@ -525,7 +525,7 @@ fn world_range(output: &FieldOutput, f: impl Fn(&FieldWorld) -> usize) -> Option
 
 /// The thesis's map: 44 elements over 25 point landmarks and 2 walls. Ours agree when the
 /// thesis's count lies within our worlds' range; the false landmarks are given beside.
-fn map_size_claims(output: &FieldOutput) -> Vec<Claim> {
+fn map_size_claims(config: &FieldParams, output: &FieldOutput) -> Vec<Claim> {
     let (Some(elements), Some(ids)) = (
         world_range(output, |w| w.map_size.elements),
         world_range(output, |w| w.mapping.mapped_ids),
@@ -557,10 +557,9 @@ fn map_size_claims(output: &FieldOutput) -> Vec<Claim> {
                 String::new()
             } else {
                 format!(
-                    "our maps keep every triplet of mapped landmarks seen together in enough \
-                     scans, so the count grows with the cube of the landmarks seen at once: \
-                     {per:.0} elements per landmark on average against the thesis's {:.1} (see \
-                     the map's size)",
+                    "our maps keep {}: {per:.1} elements per landmark on average against the \
+                     thesis's {:.1}, over more landmarks (see the map's size)",
+                    config.elements.rule(config.min_observations),
                     THESIS_ELEMENTS as f64 / THESIS_POINT_LANDMARKS as f64
                 )
             },
@@ -750,10 +749,13 @@ mod tests {
     #[test]
     fn the_success_rate_agrees_within_the_thesis_interval_only() {
         let claim = |k: usize| {
-            claims(&output(vec![summary(FieldVariant::Thesis, 100, k, 1.0)]))
-                .into_iter()
-                .next()
-                .map(|c| c.verdict)
+            claims(
+                &FieldParams::quick(0),
+                &output(vec![summary(FieldVariant::Thesis, 100, k, 1.0)]),
+            )
+            .into_iter()
+            .next()
+            .map(|c| c.verdict)
         };
         assert_eq!(claim(80), Some(Verdict::Agree));
         assert_eq!(claim(95), Some(Verdict::Disagree));

@@ -11,7 +11,7 @@ use sim2d::{CandidateKind, ExtractorConfig, Hit, Pose, TriangleRecognizer, World
 use qlink::{Layer, QualitativeMap};
 
 use super::walls::{self, WallModel, WallSighting};
-use super::{FieldParams, WALL_FRAME_END, WALL_FRAME_START};
+use super::{FieldElements, FieldParams, WALL_FRAME_END, WALL_FRAME_START};
 use crate::error::{Result, StudyError};
 /// Figures of the mapping drive.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -64,8 +64,8 @@ pub struct FieldMap {
     pub truth: BTreeMap<u32, Hit>,
     /// Ground truth: every object each id was recognised from during the drive, with counts.
     pub recognitions: BTreeMap<u32, Vec<(Hit, usize)>>,
-    /// Per mapped id: fraction of the drive's scans within effective range in which it was
-    /// recognised.
+    /// Per mapped id: the share of the drive's scans that recognised it out of those that
+    /// recognised the rest of an element holding it (from the scans alone).
     pub visibility: BTreeMap<u32, f64>,
     /// Ground truth: the walls' frame, world positions of [`WALL_FRAME_START`] and
     /// [`WALL_FRAME_END`] (for scoring; the robot places them from its scans, `walls`).
@@ -132,6 +132,40 @@ fn triplets(obs: &[Observation]) -> impl Iterator<Item = ([u32; 3], [Observation
             })
         })
     })
+}
+
+/// The triangles of the Delaunay triangulation of one scan's landmarks, as sorted id
+/// triplets (an id placed where another already is joins nothing; fewer than three places,
+/// or all on one line, give none).
+///
+/// # Errors
+/// [`StudyError::InvalidParameter`] for a position the triangulation cannot take (not
+/// finite, or beyond its range).
+fn delaunay_triplets(obs: &[Observation]) -> Result<Vec<[u32; 3]>> {
+    use spade::{DelaunayTriangulation, Point2, Triangulation};
+    let mut tri: DelaunayTriangulation<Point2<f64>> = DelaunayTriangulation::new();
+    let mut ids = Vec::with_capacity(obs.len());
+    for o in obs {
+        let [x, y] = o.mean;
+        let handle = tri.insert(Point2::new(x, y)).map_err(|e| {
+            StudyError::InvalidParameter(format!(
+                "landmark {} at ({x}, {y}) cannot be triangulated: {e:?}",
+                o.id.0
+            ))
+        })?;
+        // a repeated position returns the first one's vertex: it keeps that id
+        if handle.index() == ids.len() {
+            ids.push(o.id.0);
+        }
+    }
+    Ok(tri
+        .inner_faces()
+        .map(|face| {
+            let mut k = face.vertices().map(|v| ids[v.index()]);
+            k.sort_unstable();
+            k
+        })
+        .collect())
 }
 
 /// What the drive's first pass recognised, scan by scan.
@@ -228,15 +262,36 @@ fn layers(
         seed: params.seed,
         ..PqrmConfig::default()
     };
+    let mapped = |id: &u32| r.seen_at.get(id).map_or(0, Vec::len) >= params.min_landmark_scans;
     let mut count: BTreeMap<[u32; 3], usize> = BTreeMap::new();
+    let mut together: BTreeMap<[u32; 3], usize> = BTreeMap::new();
     for (_, obs, _, _) in &r.per_frame {
-        for (k, _) in triplets(obs) {
-            *count.entry(k).or_insert(0) += 1;
+        match params.elements {
+            FieldElements::CoObserved => {
+                for (k, _) in triplets(obs) {
+                    *count.entry(k).or_insert(0) += 1;
+                }
+            }
+            FieldElements::Delaunay => {
+                // neighbours among the map's landmarks: one seen too rarely to be mapped
+                // would otherwise split triangles the map then drops
+                let kept: Vec<Observation> =
+                    obs.iter().filter(|o| mapped(&o.id.0)).copied().collect();
+                for k in delaunay_triplets(&kept)? {
+                    *count.entry(k).or_insert(0) += 1;
+                }
+                for (k, _) in triplets(&kept) {
+                    *together.entry(k).or_insert(0) += 1;
+                }
+            }
         }
     }
-    let mapped = |id: &u32| r.seen_at.get(id).map_or(0, Vec::len) >= params.min_landmark_scans;
     let often = |k: &[u32; 3]| {
-        count.get(k).is_some_and(|&n| n >= params.min_observations) && k.iter().all(mapped)
+        count.get(k).is_some_and(|&n| {
+            n >= params.min_observations
+                && (params.elements == FieldElements::CoObserved
+                    || 2 * n > together.get(k).copied().unwrap_or(0))
+        }) && k.iter().all(mapped)
     };
     let mut points_layer = Pqrm::new(Calculus::builtin("left-right")?, config)?;
     let mut wall_layer = Pqrm::new(wall_calculus()?, config)?;
@@ -269,45 +324,49 @@ fn layers(
     Ok((points_layer, wall_layer))
 }
 
-/// Per mapped id: recognised / scans taken within the effective range of the id's mean
-/// position; for the walls' frame, the scans that extracted both walls out of those taken in
-/// or by the corridor.
-fn visibility(
-    map: &QualitativeMap,
-    r: &Recognised,
-    frames: &[sim2d::Frame],
-    effective_range: f64,
-    frame_pts: [[f64; 2]; 2],
-) -> BTreeMap<u32, f64> {
+/// Per mapped id: how often the drive recognised it when it could have — of the scans that
+/// recognised the other landmarks of an element holding it (the robot in that element's
+/// frame, where a POMDP looks for it), the share that recognised it too. The walls' frame
+/// points are one sighting: theirs is the share of the scans that recognised a point of a
+/// wall-layer element in which both walls were recognised. From the scans alone: no pose, no
+/// truth (at least 0.02, so that no link is impossible).
+fn visibility(map: &QualitativeMap, r: &Recognised) -> BTreeMap<u32, f64> {
+    let is_frame = |l: u32| l == WALL_FRAME_START || l == WALL_FRAME_END;
+    let scans: Vec<(BTreeSet<u32>, bool)> = r
+        .per_frame
+        .iter()
+        .map(|(_, obs, walls, _)| (obs.iter().map(|o| o.id.0).collect(), walls.is_some()))
+        .collect();
+    let seen = |(ids, walls): &(BTreeSet<u32>, bool), l: u32| {
+        if is_frame(l) {
+            *walls
+        } else {
+            ids.contains(&l)
+        }
+    };
     let mut visibility = BTreeMap::new();
     for id in map.landmarks() {
-        let v = match r.seen_at.get(&id) {
-            Some(list) => {
-                let n = list.len() as f64;
-                let mean = list
+        // the other members of each element holding `id` that its sighting does not bring
+        let frames: Vec<Vec<u32>> = map
+            .elements_with(id)
+            .iter()
+            .map(|&e| {
+                map.elements()[e]
+                    .landmarks
                     .iter()
-                    .fold([0.0, 0.0], |m, (_, p)| [m[0] + p[0] / n, m[1] + p[1] / n]);
-                let near = r
-                    .drive
-                    .iter()
-                    .zip(frames)
-                    .filter(|(p, f)| {
-                        f.scan.is_some()
-                            && (p[0] - mean[0]).hypot(p[1] - mean[1]) <= effective_range
-                    })
-                    .count();
-                (n / near.max(1) as f64).clamp(0.02, 1.0)
+                    .copied()
+                    .filter(|&l| l != id && !(is_frame(id) && is_frame(l)))
+                    .collect()
+            })
+            .collect();
+        let (mut chances, mut hits) = (0_usize, 0_usize);
+        for scan in &scans {
+            if frames.iter().any(|f| f.iter().all(|&l| seen(scan, l))) {
+                chances += 1;
+                hits += usize::from(seen(scan, id));
             }
-            None => {
-                let near = r
-                    .drive
-                    .iter()
-                    .filter(|p| (p[0] - frame_pts[0][0]).abs() <= 50.0 && p[1].abs() <= 20.0)
-                    .count();
-                (r.wall_frames as f64 / near.max(1) as f64).clamp(0.02, 1.0)
-            }
-        };
-        visibility.insert(id, v);
+        }
+        visibility.insert(id, (hits as f64 / chances.max(1) as f64).clamp(0.02, 1.0));
     }
     visibility
 }
@@ -375,7 +434,7 @@ pub fn map_field(params: &FieldParams) -> Result<FieldMap> {
         Layer::Probabilistic(points_layer),
         Layer::Probabilistic(wall_layer),
     ])?;
-    let visibility = visibility(&map, &r, &frames, effective_range, frame_pts);
+    let visibility = visibility(&map, &r);
     let mapped: BTreeSet<u32> = map
         .landmarks()
         .into_iter()
@@ -412,4 +471,216 @@ pub fn map_field(params: &FieldParams) -> Result<FieldMap> {
         walls: wall_model,
         stats,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn obs(points: &[(u32, [f64; 2])]) -> Vec<Observation> {
+        let cov = [[0.01, 0.0], [0.0, 0.01]];
+        points
+            .iter()
+            .map(|&(id, p)| Observation::new(LandmarkId(id), p, cov).unwrap())
+            .collect()
+    }
+
+    fn sorted(mut v: Vec<[u32; 3]>) -> Vec<[u32; 3]> {
+        v.sort_unstable();
+        v
+    }
+
+    /// A small deterministic scatter in general position (splitmix64 draws; a lattice-like
+    /// sequence would put four points on one circle, where the triangulation is not unique).
+    fn scatter(n: u32, scale: f64) -> Vec<(u32, [f64; 2])> {
+        let mut state = 0x9e37_79b9_7f4a_7c15_u64;
+        let mut draw = move || {
+            state = state.wrapping_add(0x9e37_79b9_7f4a_7c15);
+            let mut z = state;
+            z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+            z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+            (z ^ (z >> 31)) as f64 / u64::MAX as f64
+        };
+        (0..n)
+            .map(|i| (100 + 3 * i, [scale * draw(), scale * draw()]))
+            .collect()
+    }
+
+    #[test]
+    fn a_square_and_its_centre_give_the_four_triangles_about_the_centre() {
+        let o = obs(&[
+            (7, [0.0, 0.0]),
+            (3, [2.0, 0.0]),
+            (9, [2.0, 2.0]),
+            (1, [0.0, 2.0]),
+            (5, [1.0, 1.1]),
+        ]);
+        assert_eq!(
+            sorted(delaunay_triplets(&o).unwrap()),
+            [[1, 5, 7], [1, 5, 9], [3, 5, 7], [3, 5, 9]]
+        );
+    }
+
+    #[test]
+    fn every_triangle_has_an_empty_circumcircle_and_there_are_2n_minus_2_minus_h() {
+        let pts = scatter(40, 30.0);
+        let at: BTreeMap<u32, [f64; 2]> = pts.iter().copied().collect();
+        let tris = delaunay_triplets(&obs(&pts)).unwrap();
+        for k in &tris {
+            let [a, b, c] = k.map(|id| at[&id]);
+            // circumcentre
+            let d = 2.0 * (a[0] * (b[1] - c[1]) + b[0] * (c[1] - a[1]) + c[0] * (a[1] - b[1]));
+            let sq = |p: [f64; 2]| p[0] * p[0] + p[1] * p[1];
+            let ux = (sq(a) * (b[1] - c[1]) + sq(b) * (c[1] - a[1]) + sq(c) * (a[1] - b[1])) / d;
+            let uy = (sq(a) * (c[0] - b[0]) + sq(b) * (a[0] - c[0]) + sq(c) * (b[0] - a[0])) / d;
+            let r = (a[0] - ux).hypot(a[1] - uy);
+            for (id, p) in &pts {
+                if !k.contains(id) {
+                    assert!(
+                        (p[0] - ux).hypot(p[1] - uy) > r - 1e-9,
+                        "{id} inside the circumcircle of {k:?}"
+                    );
+                }
+            }
+        }
+        // Euler: a triangulation of n points in general position, h of them on the hull
+        let hull = {
+            use spade::Triangulation as _;
+            let mut t: spade::DelaunayTriangulation<spade::Point2<f64>> =
+                spade::DelaunayTriangulation::new();
+            for (_, p) in &pts {
+                t.insert(spade::Point2::new(p[0], p[1])).unwrap();
+            }
+            t.convex_hull_size()
+        };
+        assert_eq!(tris.len(), 2 * pts.len() - 2 - hull);
+        assert_eq!(tris.iter().collect::<BTreeSet<_>>().len(), tris.len());
+    }
+
+    #[test]
+    fn the_triangles_do_not_depend_on_the_robots_frame() {
+        let pts = scatter(25, 20.0);
+        let (s, c) = 1.1_f64.sin_cos();
+        let moved: Vec<(u32, [f64; 2])> = pts
+            .iter()
+            .map(|&(id, [x, y])| (id, [c * x - s * y - 7.0, s * x + c * y + 3.5]))
+            .collect();
+        assert_eq!(
+            sorted(delaunay_triplets(&obs(&pts)).unwrap()),
+            sorted(delaunay_triplets(&obs(&moved)).unwrap())
+        );
+    }
+
+    // regression: the vertex of a repeated position is the first id's; the ids after it must
+    // still name their own vertices (an index per observation would shift them by one)
+    #[test]
+    fn a_repeated_position_keeps_the_first_id_and_shifts_no_other() {
+        let o = obs(&[
+            (10, [0.0, 0.0]),
+            (11, [0.0, 0.0]),
+            (12, [1.0, 0.0]),
+            (13, [0.0, 1.0]),
+        ]);
+        assert_eq!(delaunay_triplets(&o).unwrap(), [[10, 12, 13]]);
+    }
+
+    #[test]
+    fn too_few_or_collinear_landmarks_give_no_triangle_and_a_huge_one_is_an_error() {
+        assert!(delaunay_triplets(&[]).unwrap().is_empty());
+        assert!(
+            delaunay_triplets(&obs(&[(1, [0.0, 0.0]), (2, [1.0, 1.0])]))
+                .unwrap()
+                .is_empty()
+        );
+        let line = obs(&[
+            (1, [0.0, 0.0]),
+            (2, [1.0, 1.0]),
+            (3, [2.0, 2.0]),
+            (4, [5.0, 5.0]),
+        ]);
+        assert!(delaunay_triplets(&line).unwrap().is_empty());
+        let huge = obs(&[(1, [0.0, 0.0]), (2, [1e300, 0.0]), (3, [0.0, 1.0])]);
+        let err = delaunay_triplets(&huge).unwrap_err().to_string();
+        assert!(err.contains("landmark 2"), "{err}");
+    }
+    /// Issue 36: the link detection probabilities came from the drive's true poses and the
+    /// walls' true frame; now from which scans recognised what. Three landmarks (1, 2, 3) and
+    /// the walls over four scans — {1, 2, 3} + walls, {1, 2, 3}, {1, 2} + walls, {2, 3}.
+    #[test]
+    fn visibility_is_the_share_of_chances_the_scans_took() {
+        let cov = [[0.01, 0.0], [0.0, 0.01]];
+        let at = |id: u32, p: [f64; 2]| Observation::new(LandmarkId(id), p, cov).unwrap();
+        let wall = walls::tests::wall;
+        let sighting = walls::sight(
+            &[
+                wall([5.0, -7.5], [25.0, -7.5]),
+                wall([5.0, 7.5], [25.0, 7.5]),
+            ],
+            30.0,
+            std::f64::consts::TAU,
+            None,
+        );
+        assert!(sighting.is_some());
+        let p = [(1, [3.0, 1.0]), (2, [4.0, -2.0]), (3, [6.0, 0.5])];
+        let scan = |ids: &[u32], walls: bool| {
+            let obs: Vec<Observation> = p
+                .iter()
+                .filter(|(id, _)| ids.contains(id))
+                .map(|&(id, q)| at(id, q))
+                .collect();
+            (
+                0.0,
+                obs,
+                if walls { sighting } else { None },
+                Pose::default(),
+            )
+        };
+        let r = Recognised {
+            hits: BTreeMap::new(),
+            seen_at: BTreeMap::new(),
+            distances: Vec::new(),
+            detections: 0,
+            wall_frames: 2,
+            rays: 0,
+            ground_rays: 0,
+            drive: Vec::new(),
+            per_frame: vec![
+                scan(&[1, 2, 3], true),
+                scan(&[1, 2, 3], false),
+                scan(&[1, 2], true),
+                scan(&[2, 3], false),
+            ],
+        };
+        let config = PqrmConfig {
+            samples: 20,
+            ..PqrmConfig::default()
+        };
+        let mut points = Pqrm::new(Calculus::builtin("left-right").unwrap(), config).unwrap();
+        points
+            .update(&Scan::new(0.0, 0, r.per_frame[0].1.clone()).unwrap())
+            .unwrap();
+        let mut walled = Pqrm::new(wall_calculus().unwrap(), config).unwrap();
+        let frame = vec![
+            at(1, [3.0, 1.0]),
+            at(WALL_FRAME_START, [25.0, 0.0]),
+            at(WALL_FRAME_END, [5.0, 0.0]),
+        ];
+        walled.update(&Scan::new(0.0, 0, frame).unwrap()).unwrap();
+        let map = QualitativeMap::new(vec![
+            Layer::Probabilistic(points),
+            Layer::Probabilistic(walled),
+        ])
+        .unwrap();
+        let v = visibility(&map, &r);
+        // 3: the scans with 1 and 2 (three), two of them with 3
+        assert!((v[&3] - 2.0 / 3.0).abs() < 1e-12, "{v:?}");
+        // 2: the scans with 1 and 3 (two), both with 2
+        assert!((v[&2] - 1.0).abs() < 1e-12, "{v:?}");
+        // 1: the scans with 2 and 3, or with the walls (all four), three with 1
+        assert!((v[&1] - 0.75).abs() < 1e-12, "{v:?}");
+        // the frame points: the scans with 1 (three), two with both walls
+        for f in [WALL_FRAME_START, WALL_FRAME_END] {
+            assert!((v[&f] - 2.0 / 3.0).abs() < 1e-12, "{v:?}");
+        }
+    }
 }

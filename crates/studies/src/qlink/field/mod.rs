@@ -8,7 +8,8 @@
 //! The ground is not flat (sim2d's `Terrain`: hummocks and hollows in the open field, a basin
 //! off the corridor's open end): where it rises into the scan plane the scan holds ground
 //! returns instead of what lies behind. Only ids recognised in `min_landmark_scans` scans of
-//! the drive are mapped, and triplets of them seen together in `min_observations`.
+//! the drive are mapped, and of their triplets the neighbours ([`FieldElements`]: triangles of
+//! the scans' Delaunay triangulations, in `min_observations` scans).
 //! Detections are modelled as N(0, 0.7) as in the thesis. Two layers make a hybrid map:
 //!
 //! - **point triplets** with the flip-flop calculus (`left-right`);
@@ -50,8 +51,8 @@
 //! controller (covers the target state while keeping the references within the extractor's
 //! *effective* range, measured from the mapping drive), and visibility-aware edge costs
 //! (each link's detection probability in its POMDP is how often the mapping drive
-//! recognised that landmark when it was within effective range, instead of one value for
-//! every landmark).
+//! recognised that landmark when it recognised the rest of an element holding it, instead of
+//! one value for every landmark).
 
 mod claims;
 mod experiment;
@@ -119,6 +120,9 @@ pub struct FieldParams {
     /// (measured; see issue 36's notes).
     #[serde(default = "three_scans")]
     pub min_landmark_scans: usize,
+    /// Which triplets of mapped landmarks become point elements ([`FieldElements`]).
+    #[serde(default)]
+    pub elements: FieldElements,
     /// Landmarks two elements must share for a link (2 in §4.4.2).
     pub beta: usize,
     /// POMDP horizon (4 in §4.4.2).
@@ -141,6 +145,43 @@ pub struct FieldParams {
     /// Idealised: the robot drives its waypoints exactly (`robot` unused; runs labelled).
     #[serde(default)]
     pub exact_robot: bool,
+}
+
+/// Which triplets of the mapped landmarks the map keeps as point elements. The thesis's field
+/// map has 44 elements over 25 point landmarks and 2 walls and does not say how they were
+/// chosen. Every triplet seen together grows with the cube of the landmarks seen at once (a
+/// 30 m scanner sees dozens); a landmark's neighbours grow with the landmarks.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum FieldElements {
+    /// Every triplet seen together in `min_observations` scans.
+    CoObserved,
+    /// Neighbours: the triplets that are triangles of the Delaunay triangulation of a scan's
+    /// mapped landmarks (as that scan placed them, in the robot's frame: no metric map) in
+    /// `min_observations` scans and in most of the scans that saw all three. A triangulation
+    /// of n points has at most 2n − 5 triangles; a triangle of a partial view (thin, along
+    /// the edge of what the scan saw) is split in the views that see more, so "most scans"
+    /// keeps the triangles of the site rather than of one view.
+    #[default]
+    Delaunay,
+}
+
+impl FieldElements {
+    /// The rule in words, for reports: "triplets … in at least `min_observations` scans".
+    #[must_use]
+    pub fn rule(self, min_observations: usize) -> String {
+        match self {
+            Self::CoObserved => format!(
+                "every triplet of mapped landmarks seen together in at least {min_observations} \
+                 scans"
+            ),
+            Self::Delaunay => format!(
+                "the triplets of mapped landmarks that are triangles of a scan's Delaunay \
+                 triangulation in at least {min_observations} scans and in most of the scans \
+                 that saw all three (neighbours, not every triplet in view)"
+            ),
+        }
+    }
 }
 
 fn one_world() -> usize {
@@ -195,6 +236,7 @@ impl FieldParams {
             range_sigma: 0.02,
             min_observations: 3,
             min_landmark_scans: three_scans(),
+            elements: FieldElements::default(),
             beta: 2,
             horizon: 4,
             max_replans: 3,

@@ -7,7 +7,7 @@ use super::claims::{THESIS_IN_VIVO, THESIS_TABLE_4_2, claims, ours_by_plan_len};
 use super::output::{FieldOutput, FieldWorld};
 use super::summary::{BoundSummary, FieldSummary};
 use super::trials::{FieldResult, FieldTrial};
-use super::{FieldParams, FieldVariant};
+use super::{FieldElements, FieldParams, FieldVariant};
 use crate::report::{Cell, Column, Figure, Plot, Report, SiteRun, Table};
 
 /// Runs drawn per variant in Fig 4.9 (more hide each other).
@@ -29,7 +29,7 @@ pub fn report(config: &FieldParams, output: &FieldOutput) -> Report {
             table_4_2_data(&output.variants),
             trials_table(output),
         ],
-        claims: claims(output),
+        claims: claims(config, output),
         figures: figures(output),
         notes: DIFFERENCES.to_owned(),
         attachments: Vec::new(),
@@ -94,8 +94,8 @@ fn maps_table(config: &FieldParams, worlds: &[FieldWorld]) -> Table {
         "The thesis's map: 25 point landmarks, 2 walls, 44 elements, N(0, 0.7), landmarks \
          recognised by triangles of side lengths, a 60 m lidar with conservative extraction. \
          Ours: N(0, {}), triangles within {} m and {} matching triangles per id, a 30 m \
-         scanner; ids recognised in at least {} scans of the drive, triplets seen together \
-         in at least {}; the effective range is the median distance at which the drive \
+         scanner; ids recognised in at least {} scans of the drive, and as elements {}; \
+         the effective range is the median distance at which the drive \
          recognised landmarks. The walls are recognised from the scans (two long parallel \
          wall candidates a corridor's width apart); the frame error is the mean distance of \
          the frame points the drive's scans placed from the true ones. Rays on the ground: \
@@ -106,7 +106,7 @@ fn maps_table(config: &FieldParams, worlds: &[FieldWorld]) -> Table {
         config.tolerance,
         config.min_votes,
         config.min_landmark_scans,
-        config.min_observations
+        config.elements.rule(config.min_observations)
     ));
     for w in worlds {
         let s = &w.mapping;
@@ -340,14 +340,19 @@ fn map_size_table(config: &FieldParams, worlds: &[FieldWorld]) -> Table {
     )
     .caption(format!(
         "The thesis's map: 25 point landmarks (C(25, 3) = 2,300 triplets) and 44 elements — \
-         how the 44 were chosen is not said. Ours keeps every point triplet seen together in at \
-         least {} scans, so the element count grows with the cube of the landmarks seen \
-         together: a 30 m scanner sees many at once. Restricting the map to triplets whose \
+         how the 44 were chosen is not said. Ours keeps {}{}. Restricting the map to triplets whose \
          landmarks are pairwise within the effective range (§4.3.4's second case) and planning \
          the same tasks (unit costs, β = {}) shows what the size does to plans: a dense map \
          gives short plans with long transitions between far-apart frames, a restricted one \
          longer plans of short transitions, and more tasks with no path.",
-        config.min_observations, config.beta
+        config.elements.rule(config.min_observations),
+        if config.elements == FieldElements::CoObserved {
+            ", so the element count grows with the cube of the landmarks seen together: a 30 m \
+             scanner sees many at once"
+        } else {
+            ""
+        },
+        config.beta
     ));
     for w in worlds {
         let (z, x) = (&w.map_size, &w.restricted_map_plans);
@@ -546,17 +551,18 @@ const DIFFERENCES: &str = "## Where we differ and why\n\n\
   \"sensor sweep\").\n\
 - Perceptual aliasing happens when the recogniser matches the wrong object by triangle side \
   lengths; the robot then measures relative to the wrong object.\n\
-- Our maps keep the landmarks recognised in enough scans and every triplet of them seen \
-  together in at least three: a hundred or more landmark sets (each recorded under its six orderings as PQRM entries) against the thesis's 44 (see \
-  \"The map's size\"). Our trajectories include POMDP searches and fallback circles at the \
+- Our maps keep the landmarks recognised in enough scans and, of their triplets, those the \
+  set-up names; the thesis does not say how its 44 were chosen (see \"The map's size\"; \
+  each landmark set is recorded under its six orderings as PQRM entries). Our trajectories include POMDP searches and fallback circles at the \
   effective range, and the final search for the goal itself.\n\
 - Midpoint-and-sweep suits the thesis's 60 m lidar: from the references' midpoint one sweep \
   covers the target state. With a much shorter effective range it often does not, and the \
   fallback circle can leave the robot where nothing it mapped is in view — the thesis's \
   insufficient-features failure. Safe search covers the state while keeping the references \
   within the effective range.\n\
-- Visibility-aware costs, as built here (each link's detection probability in its POMDP = how \
-  often the mapping drive recognised it when within the effective range), change the routes; \
+- Visibility-aware costs, as built here (each link's detection probability in its POMDP = the \
+  share of the mapping drive's scans that recognised it out of those that recognised the rest \
+  of an element holding it — from the scans alone), change the routes; \
   whether that helps is the claim above, measured, not tuned.\n\
 - Worlds differ a lot (see the per-world table): one world's rate is not a property of the \
   method; compare the means and their spread.\n\

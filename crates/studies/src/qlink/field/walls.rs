@@ -286,11 +286,12 @@ pub fn learn(sightings: &[(Pose, WallSighting)]) -> Option<WallModel> {
 }
 
 #[cfg(test)]
-mod tests {
+pub(super) mod tests {
     use super::*;
     use std::f64::consts::TAU;
 
-    fn wall(a: [f64; 2], b: [f64; 2]) -> Candidate {
+    /// A wall candidate from `a` to `b` (also the mapping tests').
+    pub(in crate::qlink::field) fn wall(a: [f64; 2], b: [f64; 2]) -> Candidate {
         Candidate {
             kind: CandidateKind::Wall,
             centre: [(a[0] + b[0]) / 2.0, (a[1] + b[1]) / 2.0],
