@@ -35,6 +35,45 @@ impl Trend {
         }
     }
 
+    /// The trend of sample means `(mean, standard error)` in order, read through their noise:
+    /// a step — between neighbours, or from the first to the last — counts only where it
+    /// exceeds `z` standard errors of the difference (1.96: the 5 % level). A dip within
+    /// the noise of two means drawn from a rising series is not a fall; a rise within it is
+    /// not a rise either.
+    ///
+    /// ```
+    /// use studies::verdict::Trend;
+    /// // 30 → 44 → 34 → 48 m, each ± 3 m: the dip 44 → 34 is beyond noise
+    /// let dipped = [(30.0, 3.0), (44.0, 3.0), (34.0, 3.0), (48.0, 3.0)];
+    /// assert_eq!(Trend::of_means(&dipped, 1.96), Trend::Mixed);
+    /// // ± 6 m: it is not (1.96·√2·6 ≈ 16.6 m), and 30 → 48 is
+    /// let noisy = [(30.0, 6.0), (44.0, 6.0), (34.0, 6.0), (48.0, 6.0)];
+    /// assert_eq!(Trend::of_means(&noisy, 1.96), Trend::Rises);
+    /// ```
+    #[must_use]
+    pub fn of_means(rows: &[(f64, f64)], z: f64) -> Self {
+        let step = |a: (f64, f64), b: (f64, f64)| {
+            let noise = z * a.1.hypot(b.1);
+            if b.0 - a.0 > noise {
+                1
+            } else if a.0 - b.0 > noise {
+                -1
+            } else {
+                0
+            }
+        };
+        let mut steps: Vec<i32> = rows.windows(2).map(|w| step(w[0], w[1])).collect();
+        if let (Some(&a), Some(&b)) = (rows.first(), rows.last()) {
+            steps.push(step(a, b));
+        }
+        match (steps.contains(&1), steps.contains(&-1)) {
+            (true, false) => Self::Rises,
+            (false, true) => Self::Falls,
+            (false, false) => Self::Flat,
+            (true, true) => Self::Mixed,
+        }
+    }
+
     /// "rises", "falls", "is flat", "rises and falls".
     #[must_use]
     pub fn phrase(self) -> &'static str {
@@ -89,6 +128,32 @@ pub fn agreement(ours: Trend, theirs: Trend) -> &'static str {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn steps_within_the_noise_of_the_means_do_not_count() {
+        // one point per mean, no spread: every step counts, as `of` with no tolerance
+        let exact = [(1.0, 0.0), (2.0, 0.0), (1.5, 0.0)];
+        assert_eq!(Trend::of_means(&exact, 1.96), Trend::Mixed);
+        assert_eq!(
+            Trend::of_means(&[(1.0, 0.0), (2.0, 0.0)], 1.96),
+            Trend::Rises
+        );
+        assert_eq!(
+            Trend::of_means(&[(2.0, 0.0), (1.0, 0.0)], 1.96),
+            Trend::Falls
+        );
+        // a rise of 1.9 standard errors is no rise; of 2.0 it is
+        let se = 1.0 / 2f64.sqrt();
+        assert_eq!(Trend::of_means(&[(0.0, se), (1.9, se)], 2.0), Trend::Flat);
+        assert_eq!(Trend::of_means(&[(0.0, se), (2.01, se)], 2.0), Trend::Rises);
+        // small steps adding up beyond noise are a rise; one that falls beyond it is not
+        let creep = [(0.0, 1.0), (2.0, 1.0), (4.0, 1.0), (6.0, 1.0)];
+        assert_eq!(Trend::of_means(&creep, 1.96), Trend::Rises);
+        let slump = [(0.0, 1.0), (2.0, 1.0), (-2.0, 1.0), (6.0, 1.0)];
+        assert_eq!(Trend::of_means(&slump, 1.96), Trend::Mixed);
+        assert_eq!(Trend::of_means(&[], 1.96), Trend::Flat);
+        assert_eq!(Trend::of_means(&[(3.0, 1.0)], 1.96), Trend::Flat);
+    }
 
     #[test]
     fn a_flat_series_is_flat_not_growing() {
