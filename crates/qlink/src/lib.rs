@@ -55,7 +55,7 @@ pub use error::{QlinkError, Result};
 pub use execution::{Arrival, Odometry, References, Sensing};
 pub use graph::{CostModel, DistanceField, LinkEdge, LinkGraph, Plan};
 pub use map::{Layer, MapElement, QualitativeMap};
-pub use navigate::{Failure, NavConfig, NavOutcome, Navigator, TransitionRecord};
+pub use navigate::{Failure, NavConfig, NavOutcome, Navigator, Stranded, TransitionRecord};
 pub use perception::{Look, Perception, RangePerception};
 pub use pomdp::{Decision, Moves, SearchPomdp, SearchPomdpBuilder};
 pub use robot::{DetectionNoise, MotionNoise, Robot};

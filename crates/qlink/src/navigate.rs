@@ -152,6 +152,32 @@ pub enum Failure {
     InsufficientFeatures,
 }
 
+/// What a run that failed for insufficient features was left without, after its last
+/// contingency (a failed transition or goal search).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Stranded {
+    /// No map element in view, even after the localisation circle.
+    NoElementInView,
+    /// Elements in view, but no path to the goal once the failed links (and the goal
+    /// elements searched in vain) are excluded.
+    NoPathLeft,
+    /// The re-plan budget ([`NavConfig::max_replans`]) was spent, or re-planning is off.
+    ReplanBudget,
+}
+
+impl Stranded {
+    /// Its name in files (as in JSON).
+    #[must_use]
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::NoElementInView => "no-element-in-view",
+            Self::NoPathLeft => "no-path-left",
+            Self::ReplanBudget => "replan-budget",
+        }
+    }
+}
+
 /// One transition as executed.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct TransitionRecord {
@@ -183,6 +209,9 @@ pub struct NavOutcome {
     pub plan_len: usize,
     /// Re-plans made.
     pub replans: usize,
+    /// For a run that failed for insufficient features: what it was left without.
+    #[serde(default)]
+    pub stranded: Option<Stranded>,
     /// Trajectory length (m).
     pub length: f64,
     /// Length driven inside transitions (excludes the start-up localisation search): what
@@ -216,6 +245,7 @@ impl NavOutcome {
             failure,
             plan_len: 0,
             replans: 0,
+            stranded: None,
             length: 0.0,
             transit_length: 0.0,
             bound: 0.0,
@@ -353,12 +383,17 @@ impl<'a, P: Perception> Navigator<'a, P> {
                 }
             }
             if starts.is_empty() {
+                // every element in view holds the goal and was given up
                 out.failure = Some(Failure::InsufficientFeatures);
+                out.stranded = Some(Stranded::NoPathLeft);
                 break;
             }
             let plan = match self.next_plan(first, field, &starts, goal, &excluded)? {
                 Ok(p) => p,
                 Err(failure) => {
+                    if failure == Failure::InsufficientFeatures {
+                        out.stranded = Some(Stranded::NoPathLeft);
+                    }
                     out.failure = Some(failure);
                     break;
                 }
@@ -443,12 +478,14 @@ impl<'a, P: Perception> Navigator<'a, P> {
     ) -> Option<Vec<usize>> {
         if !self.config.replan || out.replans >= self.config.max_replans {
             out.failure = Some(Failure::InsufficientFeatures);
+            out.stranded = Some(Stranded::ReplanBudget);
             return None;
         }
         out.replans += 1;
         let starts = self.localise(w, range);
         if starts.is_none() {
             out.failure = Some(Failure::InsufficientFeatures);
+            out.stranded = Some(Stranded::NoElementInView);
         }
         starts
     }

@@ -522,6 +522,7 @@ fn find_goal_searches_for_the_goal_itself() {
     let nav = Navigator::new(&map, &graph, &perception, &cfg).unwrap();
     let out = nav.navigate(start, 2, None, true).unwrap();
     assert!(out.success, "{:?}", out.failure);
+    assert_eq!(out.stranded, None);
     assert!(out.length > 5.0);
     let end = *out.trajectory.last().unwrap();
     assert!(qlink::Perception::sees(&perception, end, 2));
@@ -532,6 +533,17 @@ fn find_goal_searches_for_the_goal_itself() {
     assert!(!out.success);
     assert_eq!(out.failure, Some(qlink::Failure::InsufficientFeatures));
     assert_eq!(out.replans, 1);
+    // what it was left without: the one element in view holds the goal and was given up
+    assert_eq!(out.stranded, Some(qlink::Stranded::NoPathLeft));
+    // without re-planning, the first contingency ends the run
+    let once = NavConfig {
+        replan: false,
+        ..cfg.clone()
+    };
+    let nav = Navigator::new(&map, &graph, &blind, &once).unwrap();
+    let out = nav.navigate(start, 2, None, false).unwrap();
+    assert_eq!(out.replans, 0);
+    assert_eq!(out.stranded, Some(qlink::Stranded::ReplanBudget));
 }
 
 /// Hybrid maps search in layers of different sizes: the POMDP is rebuilt on the other

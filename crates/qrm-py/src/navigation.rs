@@ -121,7 +121,7 @@ pub(crate) fn qlink_field(
                 serde_json::json!({
                     "variant": t.variant, "trial": t.task.trial, "start": t.task.start,
                     "goal": t.task.goal, "result": t.result, "plan_len": t.plan_len,
-                    "replans": t.replans, "length": t.length,
+                    "replans": t.replans, "stranded": t.stranded, "length": t.length,
                     "final_distance": t.final_distance,
                     "transit_length": t.transit_length, "bounds": t.bounds,
                     "ground_share": t.ground_share,

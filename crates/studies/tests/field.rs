@@ -272,6 +272,20 @@ fn field_trials_are_deterministic_and_add_up() {
             assert!(t.final_distance < 40.0, "{t:?}");
             assert!(t.plan_len >= 1, "goals out of view need a transition");
         }
+        // only a run the navigator ended for want of features says what it lacked
+        if t.stranded.is_some() {
+            assert!(
+                matches!(
+                    t.result,
+                    FieldResult::InsufficientFeatures
+                        | FieldResult::InsufficientFeaturesAndAliasing
+                ),
+                "{t:?}"
+            );
+        }
+        if t.result == FieldResult::Success {
+            assert_eq!(t.stranded, None);
+        }
     }
 }
 

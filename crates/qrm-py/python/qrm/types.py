@@ -37,6 +37,7 @@ __all__ = [
     "MonteCarloRecord",
     "MonteCarloResult",
     "NavFailure",
+    "NavStranded",
     "NavOutcome",
     "Neighbours",
     "Observations",
@@ -266,6 +267,12 @@ class CvRecord(TypedDict):
 # A Union of one-value Literals (not one Literal of three) so that the run-time object is a
 # `typing.Union`, as stubtest expects of an alias it sees as a union.
 NavFailure: TypeAlias = Union[Literal["no-start"], Literal["no-path"], Literal["insufficient-features"]]
+NavStranded: TypeAlias = Union[
+    Literal["no-element-in-view"], Literal["no-path-left"], Literal["replan-budget"]
+]
+"""What a run that failed for insufficient features was left without after its last
+contingency: no map element in view (even after the localisation circle), no path to the goal
+once the failed links are excluded, or the re-plan budget spent."""
 """Why a navigation failed."""
 
 
@@ -292,6 +299,7 @@ class NavOutcome(TypedDict):
     failure: Optional[NavFailure]
     plan_len: int
     replans: int
+    stranded: Optional[NavStranded]
     length: float
     transit_length: float
     bound: float
@@ -449,6 +457,7 @@ class FieldTrial(TypedDict):
     result: FieldResult
     plan_len: int
     replans: int
+    stranded: Optional[NavStranded]
     length: float
     final_distance: float
     transit_length: float

@@ -8,6 +8,8 @@ use super::summary::{BoundRange, FieldSummary};
 use super::trials::{FieldResult, FieldTrial};
 use std::collections::BTreeMap;
 
+use qlink::Stranded;
+
 use super::{FieldParams, FieldVariant};
 use crate::report::{Claim, Verdict};
 use crate::verdict::{Trend, two_proportion_z, wilson_interval};
@@ -127,7 +129,7 @@ pub(super) fn claims(config: &FieldParams, output: &FieldOutput) -> Vec<Claim> {
         &output
             .trials()
             .filter(|(_, t)| t.variant == FieldVariant::Thesis && t.result != FieldResult::NoPath)
-            .map(|(_, t)| (t.result, t.replans))
+            .map(|(_, t)| (t.result, t.replans, t.stranded))
             .collect::<Vec<_>>(),
     ));
     claims.push(table_4_2_claim(
@@ -346,19 +348,24 @@ pub(super) fn ours_by_plan_len(output: &FieldOutput) -> Vec<(usize, usize, f64)>
 }
 
 /// "In five of the successful trajectories, the robot … re-plans at the link level": ours
-/// within the Wilson 95 % interval of the thesis's 5 of 13. `planned`: (result, re-plans) of
-/// the thesis set-up's runs that had a plan — where ours differs, how many met a contingency
-/// and how many of those it recovered from say why.
-fn replanning_claim(ours: &FieldSummary, planned: &[(FieldResult, usize)]) -> Claim {
+/// within the Wilson 95 % interval of the thesis's 5 of 13. `planned`: (result, re-plans,
+/// what a run stranded for want of features lacked) of the thesis set-up's runs that had a
+/// plan — where ours differs, how many met a contingency, how many of those it recovered
+/// from, and what the others were left without say why.
+fn replanning_claim(
+    ours: &FieldSummary,
+    planned: &[(FieldResult, usize, Option<Stranded>)],
+) -> Claim {
     let th = THESIS_IN_VIVO;
     let [lo, hi] = wilson_interval(th.replanned_successes, th.successes, 1.96);
     let share = ours.replanned_successes as f64 / ours.successes.max(1) as f64;
     let agree = (lo..=hi).contains(&share);
-    let met = planned.iter().filter(|(_, n)| *n > 0).count();
+    let met = planned.iter().filter(|(_, n, _)| *n > 0).count();
     let recovered = planned
         .iter()
-        .filter(|(r, n)| *n > 0 && *r == FieldResult::Success)
+        .filter(|(r, n, _)| *n > 0 && *r == FieldResult::Success)
         .count();
+    let stranded = |s: Stranded| planned.iter().filter(|p| p.2 == Some(s)).count();
     let pct = |k: usize, n: usize| 100.0 * k as f64 / n.max(1) as f64;
     Claim {
         what: "successes that re-planned at the link level (thesis set-up)".into(),
@@ -383,11 +390,17 @@ fn replanning_claim(ours: &FieldSummary, planned: &[(FieldResult, usize)]) -> Cl
             format!(
                 "a contingency (a failed transition or goal search) met {met} of our {} planned \
                  runs ({:.1} %), and {recovered} of those ({:.0} %) still reached the goal; the \
-                 thesis's 5 re-planned successes are {:.0} % of its 18 runs",
+                 thesis's 5 re-planned successes are {:.0} % of its 18 runs. Runs ended for \
+                 want of features: {} with no map element in view even after the localisation \
+                 circle, {} with no path left to the goal once the failed links were excluded, \
+                 {} with the re-plan budget spent",
                 planned.len(),
                 pct(met, planned.len()),
                 pct(recovered, met),
-                pct(th.replanned_successes, 18)
+                pct(th.replanned_successes, 18),
+                stranded(Stranded::NoElementInView),
+                stranded(Stranded::NoPathLeft),
+                stranded(Stranded::ReplanBudget),
             )
         },
     }
@@ -829,11 +842,25 @@ mod tests {
             ..summary(FieldVariant::Thesis, 200, successes, 1.0)
         };
         // runs: 90 successes without a contingency, 10 with one, 20 failures after one
-        let planned: Vec<(FieldResult, usize)> = [(FieldResult::Success, 0); 90]
-            .into_iter()
-            .chain([(FieldResult::Success, 1); 10])
-            .chain([(FieldResult::InsufficientFeatures, 2); 20])
-            .collect();
+        let planned: Vec<(FieldResult, usize, Option<Stranded>)> =
+            [(FieldResult::Success, 0, None); 90]
+                .into_iter()
+                .chain([(FieldResult::Success, 1, None); 10])
+                .chain(
+                    [(
+                        FieldResult::InsufficientFeatures,
+                        2,
+                        Some(Stranded::NoPathLeft),
+                    ); 15],
+                )
+                .chain(
+                    [(
+                        FieldResult::InsufficientFeatures,
+                        1,
+                        Some(Stranded::NoElementInView),
+                    ); 5],
+                )
+                .collect();
         // thesis: 5 of 13 (38 %; Wilson 95 % ≈ 18–64 %)
         assert_eq!(
             replanning_claim(&with(100, 38), &planned).verdict,
@@ -843,7 +870,10 @@ mod tests {
         assert_eq!(few.verdict, Verdict::Disagree);
         assert!(
             few.why.contains("met 30 of our 120 planned runs (25.0 %)")
-                && few.why.contains("10 of those (33 %)"),
+                && few.why.contains("10 of those (33 %)")
+                && few.why.contains("5 with no map element in view")
+                && few.why.contains("15 with no path left")
+                && few.why.contains("0 with the re-plan budget"),
             "{}",
             few.why
         );

@@ -13,7 +13,7 @@ use sim2d::{ExtractorConfig, Hit};
 use qlink::graph::pomdp_cost;
 use qlink::{
     BoundCheck, Controller, ControllerKind, CostModel, Failure, Geometry, LinkGraph, NavConfig,
-    NavOutcome, Navigator, Perception, QlinkError, SearchPomdp,
+    NavOutcome, Navigator, Perception, QlinkError, SearchPomdp, Stranded,
 };
 
 use super::mapping::{FieldMap, map_field};
@@ -87,6 +87,10 @@ pub struct FieldTrial {
     pub plan_len: usize,
     /// Re-plans made.
     pub replans: usize,
+    /// For a run the navigator ended for insufficient features: what it was left without
+    /// after its last contingency.
+    #[serde(default)]
+    pub stranded: Option<Stranded>,
     /// Trajectory length including the final drive to the goal element's centroid (m).
     pub length: f64,
     /// Distance from the end point to the true goal landmark (m).
@@ -483,6 +487,7 @@ pub fn run_trial(
         result,
         plan_len: out.plan_len,
         replans: out.replans,
+        stranded: out.stranded,
         length,
         final_distance: (fin[0] - task.goal_position[0]).hypot(fin[1] - task.goal_position[1]),
         detections,
