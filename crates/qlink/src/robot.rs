@@ -363,6 +363,62 @@ impl Robot {
             length: got,
         }
     }
+
+    /// A drive's poses `(x, y, θ)` as this robot's odometry has them: each move between
+    /// consecutive poses, measured in the robot's frame at the first, is integrated with the
+    /// wheels' errors — its length off by N(0, `distance_sigma`·√d) and the heading after it
+    /// by N(0, `heading_sigma`·√d) for a move of d metres — from the true first pose. So the
+    /// believed drive drifts from the true one as a random walk in the distance driven, as
+    /// [`Robot::step`]'s does. `drive` keys the draws (with the seed); the exact robot's
+    /// odometry is the drive itself, bit for bit.
+    ///
+    /// ```
+    /// use qlink::Robot;
+    /// let drive: Vec<[f64; 3]> = (0..=100).map(|i| [f64::from(i), 0.0, 0.0]).collect();
+    /// assert_eq!(Robot::EXACT.odometry(&drive, 0), drive);
+    /// let believed = Robot::default().with_seed(3).odometry(&drive, 0);
+    /// assert_eq!(believed[0], drive[0]); // it starts where it is
+    /// assert_ne!(believed[100], drive[100]); // and drifts
+    /// ```
+    #[must_use]
+    pub fn odometry(&self, poses: &[[f64; 3]], drive: u64) -> Vec<[f64; 3]> {
+        let m = self.motion;
+        if m.is_exact() {
+            return poses.to_vec();
+        }
+        let run = run_key(self.seed, &[drive]);
+        let mut out = Vec::with_capacity(poses.len());
+        let Some(&first) = poses.first() else {
+            return out;
+        };
+        let mut believed = first;
+        out.push(believed);
+        for (i, w) in poses.windows(2).enumerate() {
+            let ([x0, y0, t0], [x1, y1, t1]) = (w[0], w[1]);
+            // the move in the robot's frame at the first pose, and its turn
+            let (s0, c0) = t0.sin_cos();
+            let (dx, dy) = (x1 - x0, y1 - y0);
+            let local = [c0 * dx + s0 * dy, -s0 * dx + c0 * dy];
+            let turn = (t1 - t0 + std::f64::consts::PI).rem_euclid(std::f64::consts::TAU)
+                - std::f64::consts::PI;
+            let d = local[0].hypot(local[1]);
+            let mut rng = keyed(run, i as u64, 0, Draw::Odometry);
+            let k = if d > 0.0 {
+                (d + m.distance_sigma * d.sqrt() * normal(&mut rng)).max(0.0) / d
+            } else {
+                0.0
+            };
+            let heading_error = m.heading_sigma * d.sqrt() * normal(&mut rng);
+            let (s, c) = believed[2].sin_cos();
+            believed = [
+                believed[0] + k * (c * local[0] - s * local[1]),
+                believed[1] + k * (s * local[0] + c * local[1]),
+                believed[2] + turn + heading_error,
+            ];
+            out.push(believed);
+        }
+        out
+    }
 }
 
 /// What a keyed draw is for (part of its key, so the draws are independent).
@@ -372,6 +428,7 @@ enum Draw {
     False = 2,
     Position = 3,
     Motion = 4,
+    Odometry = 5,
 }
 
 /// splitmix64's finaliser: spreads a key's bits before it seeds a generator.
@@ -418,6 +475,49 @@ mod tests {
         ] {
             assert_ne!(a, b);
         }
+    }
+
+    /// The mapping drive's odometry drifts as the configured random walk: over 100 m driven in
+    /// quarter-metre moves, the heading's error has σ = `heading_sigma`·√100 and the length
+    /// driven σ = `distance_sigma`·√100 (a σ per move rather than per √metre would give half).
+    #[test]
+    fn odometry_drifts_with_the_configured_spread() {
+        let drive: Vec<[f64; 3]> = (0..=400).map(|i| [0.25 * f64::from(i), 0.0, 0.0]).collect();
+        let robot = Robot::default().with_seed(11);
+        let (mut headings, mut lengths) = (Vec::new(), Vec::new());
+        for key in 0..2000 {
+            let b = robot.odometry(&drive, key);
+            assert_eq!(b.len(), drive.len());
+            headings.push(b[400][2]);
+            lengths.push(
+                b.windows(2)
+                    .map(|w| (w[1][0] - w[0][0]).hypot(w[1][1] - w[0][1]))
+                    .sum::<f64>()
+                    - 100.0,
+            );
+        }
+        let sd = |v: &[f64]| {
+            let m = v.iter().sum::<f64>() / v.len() as f64;
+            (v.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (v.len() - 1) as f64).sqrt()
+        };
+        let m = robot.motion;
+        let (h, l) = (
+            sd(&headings) / (10.0 * m.heading_sigma),
+            sd(&lengths) / (10.0 * m.distance_sigma),
+        );
+        assert!(
+            (0.92..1.08).contains(&h),
+            "heading spread {h} of the configured"
+        );
+        assert!(
+            (0.92..1.08).contains(&l),
+            "length spread {l} of the configured"
+        );
+        // the same key drifts the same way; turning on the spot adds no error
+        assert_eq!(robot.odometry(&drive, 5), robot.odometry(&drive, 5));
+        let spin = [[1.0, 2.0, 0.0], [1.0, 2.0, 1.0], [1.0, 2.0, -2.0]];
+        assert_eq!(robot.odometry(&spin, 0), spin.to_vec());
+        assert!(robot.odometry(&[], 0).is_empty());
     }
 
     #[test]

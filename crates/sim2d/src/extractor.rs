@@ -288,6 +288,19 @@ fn candidate(
         });
     }
     let corner = max_off > cfg.corner_distance && chord < cfg.wall_length;
+    // A round object bigger than a landmark (a bush, a rock) bulges past `corner_distance`
+    // like a corner, but its returns lie on one circle (root-mean-square off it within
+    // `UP_CLOSE_RESIDUAL`, as the range noise allows; an L of two walls is far off any
+    // circle), of more than `max_radius`: not a landmark, however it is seen.
+    if corner
+        && pts.len() >= MIN_FIT_POINTS
+        && circle_fit(&pts).is_some_and(|(c, r)| {
+            let off = pts.iter().map(|p| (dist(*p, c) - r).powi(2)).sum::<f64>();
+            r > cfg.max_radius && (off / pts.len() as f64).sqrt() <= UP_CLOSE_RESIDUAL
+        })
+    {
+        return None;
+    }
     // Up close a landmark of `max_radius` covers more returns than `max_points` (a 0.25 m
     // pole at 2 m: 57 at 0.25°), and it dropped out of the frames nearest to it; the most a
     // plausible landmark can cover at this cluster's range is allowed too (its size is

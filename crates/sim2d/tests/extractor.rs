@@ -1,8 +1,10 @@
 //! The lidar landmark extractor and triangle recognition against the simulator's truth.
 #![allow(clippy::unwrap_used)] // tests: a panic is the failure report
 
+use rand::SeedableRng;
 use sim2d::{
-    CandidateKind, ExtractorConfig, Hit, LidarConfig, TriangleRecognizer, extract, scenario,
+    CandidateKind, Clutter, ExtractorConfig, Hit, LidarConfig, PointLandmark, Pose,
+    TriangleRecognizer, Wall, World, WorldSpec, extract, scenario,
 };
 
 #[test]
@@ -195,4 +197,96 @@ fn the_pitched_ground_fills_scans_where_it_rolls() {
         })
         .sum();
     assert!(ground_cands > 0);
+}
+
+/// Issue 36: bushes and rocks of the field site were mapped as landmarks (16–28 of 40–55 ids
+/// per world): a round object much bigger than a trunk bulges past `corner_distance`, so it was
+/// taken as a corner, which skipped the size check. Its returns lie on one circle of more than
+/// `max_radius`: not a landmark at any range; a trunk beside it still is.
+#[test]
+fn a_bush_bigger_than_any_landmark_is_no_corner() {
+    let world = World::new(WorldSpec {
+        bounds: [-30.0, 30.0, -30.0, 30.0],
+        landmarks: vec![PointLandmark {
+            id: 0,
+            pos: [8.0, 3.0],
+            radius: 0.3,
+        }],
+        // an L of two short walls, its corner towards the robot: a corner candidate
+        walls: vec![
+            Wall {
+                id: 1,
+                start: [12.0, 8.0],
+                end: [13.5, 8.0],
+            },
+            Wall {
+                id: 2,
+                start: [12.0, 8.0],
+                end: [12.0, 9.5],
+            },
+        ],
+        clutter: vec![Clutter {
+            pos: [10.0, -4.0],
+            radius: 0.9,
+        }],
+    })
+    .unwrap();
+    let lidar = LidarConfig {
+        range_sigma: 0.02,
+        ..LidarConfig::default()
+    };
+    // the same scan from each place, whatever the extractor
+    let seen = |max_radius: f64, at: [f64; 2]| {
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(at[0].to_bits() ^ at[1].to_bits());
+        let pose = Pose {
+            x: at[0],
+            y: at[1],
+            theta: 0.0,
+        };
+        let scan = world.lidar(&pose, &lidar, &mut rng).unwrap();
+        let cfg = ExtractorConfig {
+            max_radius,
+            ..ExtractorConfig::default()
+        };
+        extract(&scan, &cfg)
+            .into_iter()
+            .filter(|c| c.kind == CandidateKind::Point)
+            .filter_map(|c| c.truth)
+            .collect::<Vec<_>>()
+    };
+    let mut corners = 0;
+    for at in [
+        [0.0, 0.0],
+        [2.0, -8.0],
+        [4.0, -1.0],
+        [6.0, -2.0],
+        [3.0, 6.0],
+    ] {
+        let narrow = seen(0.5, at);
+        assert!(
+            narrow.contains(&Hit::Landmark(0)),
+            "from {at:?}: {narrow:?}"
+        );
+        assert!(
+            !narrow.contains(&Hit::Clutter(0)),
+            "from {at:?}: {narrow:?}"
+        );
+        // the corner of two walls is no circle: a candidate wherever it was before (an
+        // extractor allowing any size)
+        let walls = |v: &[Hit]| v.iter().filter(|h| matches!(h, Hit::Wall(_))).count();
+        let any = seen(1e3, at);
+        assert_eq!(
+            walls(&narrow),
+            walls(&any),
+            "from {at:?}: {narrow:?}, {any:?}"
+        );
+        corners += walls(&narrow);
+        // an extractor that allows landmarks of a metre takes the bush
+        let wide = seen(1.0, at);
+        assert!(wide.contains(&Hit::Clutter(0)), "from {at:?}: {wide:?}");
+    }
+    assert!(
+        corners >= 2,
+        "the corner was in view from two places at least"
+    );
 }

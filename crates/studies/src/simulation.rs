@@ -107,7 +107,9 @@ impl Simulation {
         let truth = match self.detector {
             Detector::Ideal => scenario.world.landmark_positions().collect(),
             // Recognised ids are the detector's own; each is scored against the landmark it was
-            // first recognised from (clutter has no truth and stays unscored).
+            // first recognised from (clutter has no truth and stays unscored). A landmark the
+            // recogniser later took for a new one is scored under its first id only: two ids
+            // at one surveyed position have no state to score.
             Detector::Lidar => {
                 let (tolerance, sigma) = LIDAR_DETECTOR;
                 // Frames of one drive: recognised by triangles and tracked from frame to frame,
@@ -118,8 +120,10 @@ impl Simulation {
                 }
                 .detect_frames(&mut frames);
                 let spec = scenario.world.spec();
+                let mut scored = std::collections::BTreeSet::new();
                 first
                     .into_iter()
+                    .filter(|&(_, i)| scored.insert(i))
                     .map(|(id, i)| (id, spec.landmarks[i].pos))
                     .collect()
             }

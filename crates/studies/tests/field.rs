@@ -45,6 +45,50 @@ fn wall_layer_calculus_equals_the_extended_frame() {
     assert_eq!(label(-10.0), "front");
 }
 
+/// Issue 36: the wall model's heading and ends came from the drive's true poses. They come
+/// from its odometry: the exact robot's map is oriented as the corridor truly runs; the
+/// wheeled robot's drifts a little from it; a robot whose heading wanders a radian per √metre
+/// has no idea where the corridor's ends are.
+#[test]
+fn the_mapping_drive_places_the_walls_by_its_odometry() {
+    let with = |exact: bool, heading_sigma: f64| {
+        let mut params = FieldParams::quick(0);
+        params.exact_robot = exact;
+        params.robot.motion.heading_sigma = heading_sigma;
+        let f = map_field(&params).unwrap();
+        let walls = f.walls.expect("the corridor recognised");
+        let [s, e] = f.wall_frame;
+        (walls, (e[1] - s[1]).atan2(e[0] - s[0]), f.stats)
+    };
+    let turn = |a: f64, b: f64| {
+        (a - b + std::f64::consts::PI).rem_euclid(std::f64::consts::TAU) - std::f64::consts::PI
+    };
+    let (exact, truth, exact_stats) = with(true, 0.0);
+    let (wheeled, _, wheeled_stats) = with(false, qlink::MotionNoise::WHEELED.heading_sigma);
+    let (lost, _, lost_stats) = with(false, 1.0);
+    assert!(
+        turn(exact.heading, truth).abs() < 3f64.to_radians(),
+        "{exact:?} vs {truth}"
+    );
+    // the drive sees the corridor from its start, where odometry is exact: the heading holds;
+    // the ends, seen later, move with the drift
+    let [l_exact, l_wheeled, l_lost] = [exact, wheeled, lost].map(|w| w.length.unwrap_or(0.0));
+    assert!(
+        turn(wheeled.heading, truth).abs() < 10f64.to_radians(),
+        "{wheeled:?}"
+    );
+    assert!(
+        l_wheeled != l_exact && (l_wheeled - 40.0).abs() < 2.0,
+        "{wheeled:?}"
+    );
+    assert!((l_lost - 40.0).abs() > 5.0, "{lost:?}");
+    assert!(wheeled_stats.wall_frame_error < 1.0, "{wheeled_stats:?}");
+    assert!(
+        lost_stats.wall_frame_error > 10.0 * exact_stats.wall_frame_error,
+        "{lost_stats:?} against {exact_stats:?}"
+    );
+}
+
 #[test]
 fn the_lidar_only_map_is_a_hybrid_map_with_all_wall_states() {
     let params = FieldParams::quick(0);
@@ -331,13 +375,13 @@ fn field_worlds_merge_in_any_order_into_the_run() {
     let config = FieldParams {
         trials: 3,
         worlds: 2,
-        ..FieldParams::quick(5)
+        ..FieldParams::quick(3)
     };
     assert_eq!(FieldExperiment::shards(&config).unwrap(), 2);
     let local = FieldExperiment::run(&config, &|| {}).unwrap();
     assert_eq!(local.worlds.len(), 2);
     assert_eq!(
-        local.worlds[1].seed, 6,
+        local.worlds[1].seed, 4,
         "world seeds follow the config's seed"
     );
     assert_eq!(local.worlds[1].trials.len(), 4 * 3);
@@ -405,17 +449,20 @@ fn a_world_too_sparse_to_plan_in_is_reported_not_refused() {
         trials: 3,
         worlds: 1,
         min_landmark_scans: 5,
-        // the map the regression was found on (every triplet seen together)
+        // the map the regression was found on (every triplet seen together, clutter of up to
+        // a metre taken for landmarks)
         elements: FieldElements::CoObserved,
+        max_landmark_radius: 1.0,
         ..FieldParams::quick(6)
     };
     let out = FieldExperiment::run(&config, &|| {}).unwrap();
     let world = &out.worlds[0];
     assert_eq!(world.draws.wanted, 3);
-    // the counts the refusal used to name: 149 starts blocked, 639 goals in view, 1,030
-    // starts in no element, 1,182 pairs with no link-graph path
+    // the counts the refusal used to name (since the extractor drops round clusters bigger
+    // than `max_landmark_radius`, which no longer pass as corners: 149 starts blocked, 627 goals in view, 1,068
+    // starts in no element, 1,156 pairs with no link-graph path; before, 639, 1,030, 1,182)
     assert_eq!(world.draws.kept, 0, "{:?}", world.draws);
-    assert_eq!(world.draws.no_path, 1182, "{:?}", world.draws);
+    assert_eq!(world.draws.no_path, 1156, "{:?}", world.draws);
     assert!(world.draws.short());
     assert!(world.trials.is_empty());
     let report = FieldExperiment::report(&config, &out);

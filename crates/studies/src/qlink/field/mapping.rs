@@ -72,6 +72,8 @@ pub struct FieldMap {
     pub wall_frame: [[f64; 2]; 2],
     /// The corridor as the drive learned it from its scans (`None`: never recognised).
     pub walls: Option<WallModel>,
+    /// The lidar's extractor (the drive's and the navigating robot's).
+    pub extractor: ExtractorConfig,
     /// Figures.
     pub stats: MappingStats,
 }
@@ -185,18 +187,34 @@ struct Recognised {
     ground_rays: usize,
     /// The drive's true positions.
     drive: Vec<[f64; 2]>,
-    /// Per scan: time, its observations (unique ids), the walls recognised, the pose.
-    per_frame: Vec<(f64, Vec<Observation>, Option<WallSighting>, Pose)>,
+    /// Per scan: what it recognised, and where the drive was.
+    per_frame: Vec<ScanRecord>,
 }
 
-/// Pass 1: every scan through the extractor and the recogniser.
+/// One scan of the mapping drive, as the first pass recognised it.
+struct ScanRecord {
+    /// Simulated time (s).
+    t: f64,
+    /// Its observations (unique ids, robot frame).
+    obs: Vec<Observation>,
+    /// The walls, when it recognised them.
+    walls: Option<WallSighting>,
+    /// Where the drive's odometry had the robot (what the mapper uses).
+    believed: Pose,
+    /// Where the robot was (scoring only).
+    truth: Pose,
+}
+
+/// Pass 1: every scan through the extractor and the recogniser; `believed`: each frame's pose
+/// as the drive's odometry has it.
 fn recognise(
     frames: &[sim2d::Frame],
+    believed: &[Pose],
     recognizer: &mut TriangleRecognizer,
     cov: [[f64; 2]; 2],
     lidar: &sim2d::LidarConfig,
+    extractor: &ExtractorConfig,
 ) -> Result<Recognised> {
-    let extractor = ExtractorConfig::default();
     let mut r = Recognised {
         hits: BTreeMap::new(),
         seen_at: BTreeMap::new(),
@@ -217,7 +235,7 @@ fn recognise(
             .iter()
             .filter(|h| **h == Some(Hit::Ground))
             .count();
-        let (cands, walls) = point_and_walls(scan, &extractor, lidar, None);
+        let (cands, walls) = point_and_walls(scan, extractor, lidar, None);
         let ids = recognizer.recognise(&cands.iter().map(|c| c.centre).collect::<Vec<_>>());
         let mut obs = Vec::new();
         let mut unique = BTreeSet::new();
@@ -243,7 +261,13 @@ fn recognise(
         if walls.is_some() {
             r.wall_frames += 1;
         }
-        r.per_frame.push((f.t, obs, walls, f.pose));
+        r.per_frame.push(ScanRecord {
+            t: f.t,
+            obs,
+            walls,
+            believed: believed.get(fi).copied().unwrap_or(f.pose),
+            truth: f.pose,
+        });
     }
     Ok(r)
 }
@@ -265,7 +289,7 @@ fn layers(
     let mapped = |id: &u32| r.seen_at.get(id).map_or(0, Vec::len) >= params.min_landmark_scans;
     let mut count: BTreeMap<[u32; 3], usize> = BTreeMap::new();
     let mut together: BTreeMap<[u32; 3], usize> = BTreeMap::new();
-    for (_, obs, _, _) in &r.per_frame {
+    for ScanRecord { obs, .. } in &r.per_frame {
         match params.elements {
             FieldElements::CoObserved => {
                 for (k, _) in triplets(obs) {
@@ -295,7 +319,14 @@ fn layers(
     };
     let mut points_layer = Pqrm::new(Calculus::builtin("left-right")?, config)?;
     let mut wall_layer = Pqrm::new(wall_calculus()?, config)?;
-    for (t, obs, walls, pose) in &r.per_frame {
+    for ScanRecord {
+        t,
+        obs,
+        walls,
+        believed: pose,
+        ..
+    } in &r.per_frame
+    {
         for (k, three) in triplets(obs) {
             if often(&k) {
                 points_layer.update(&Scan::new(*t, 0, three.to_vec())?)?;
@@ -335,7 +366,7 @@ fn visibility(map: &QualitativeMap, r: &Recognised) -> BTreeMap<u32, f64> {
     let scans: Vec<(BTreeSet<u32>, bool)> = r
         .per_frame
         .iter()
-        .map(|(_, obs, walls, _)| (obs.iter().map(|o| o.id.0).collect(), walls.is_some()))
+        .map(|s| (s.obs.iter().map(|o| o.id.0).collect(), s.walls.is_some()))
         .collect();
     let seen = |(ids, walls): &(BTreeSet<u32>, bool), l: u32| {
         if is_frame(l) {
@@ -371,6 +402,22 @@ fn visibility(map: &QualitativeMap, r: &Recognised) -> BTreeMap<u32, f64> {
     visibility
 }
 
+/// The mapping drive's poses as its odometry has them ([`qlink::Robot::odometry`] of the
+/// field's robot; the exact robot's are the true poses): the wall model's heading and ends
+/// come from these, never from where the robot truly was.
+fn drive_odometry(frames: &[sim2d::Frame], params: &FieldParams) -> Vec<Pose> {
+    let truth: Vec<[f64; 3]> = frames
+        .iter()
+        .map(|f| [f.pose.x, f.pose.y, f.pose.theta])
+        .collect();
+    params
+        .navigating_robot()
+        .odometry(&truth, 0)
+        .into_iter()
+        .map(|[x, y, theta]| Pose { x, y, theta })
+        .collect()
+}
+
 /// Maps the field site with the lidar (see the module docs).
 ///
 /// # Errors
@@ -385,21 +432,33 @@ pub fn map_field(params: &FieldParams) -> Result<FieldMap> {
     let mut recognizer = TriangleRecognizer::new(params.tolerance).with_min_votes(params.min_votes);
     let var = params.sigma * params.sigma;
     let cov = [[var, 0.0], [0.0, var]];
-    let mut r = recognise(&frames, &mut recognizer, cov, &scenario.lidar)?;
+    let believed = drive_odometry(&frames, params);
+    let mut r = recognise(
+        &frames,
+        &believed,
+        &mut recognizer,
+        cov,
+        &scenario.lidar,
+        &params.extractor(),
+    )?;
     let sightings: Vec<(Pose, WallSighting)> = r
         .per_frame
         .iter()
-        .filter_map(|(_, _, s, pose)| s.map(|s| (*pose, s)))
+        .filter_map(|s| s.walls.map(|w| (s.believed, w)))
         .collect();
     let wall_model = walls::learn(&sightings);
-    // how far the scans put the frame from the truth (scoring only)
+    // how far the scans put the frame from the truth (scoring only): each scan's frame as the
+    // robot orients it (its believed heading against the model's), placed from its true pose
     let wall_frame_error = wall_model.map_or(0.0, |m| {
-        let errors: Vec<f64> = sightings
+        let errors: Vec<f64> = r
+            .per_frame
             .iter()
-            .flat_map(|(pose, s)| {
-                let f = s.frame(pose, m.heading, m.length);
+            .filter_map(|s| s.walls.map(|w| (s, w)))
+            .flat_map(|(s, w)| {
+                let f = w.frame(&s.believed, m.heading, m.length);
+                let truth = s.truth;
                 (0..2).map(move |k| {
-                    let p = pose.to_world(f[k]);
+                    let p = truth.to_world(f[k]);
                     (p[0] - frame_pts[k][0]).hypot(p[1] - frame_pts[k][1])
                 })
             })
@@ -469,6 +528,7 @@ pub fn map_field(params: &FieldParams) -> Result<FieldMap> {
         visibility,
         wall_frame: frame_pts,
         walls: wall_model,
+        extractor: params.extractor(),
         stats,
     })
 }
@@ -628,12 +688,13 @@ mod tests {
                 .filter(|(id, _)| ids.contains(id))
                 .map(|&(id, q)| at(id, q))
                 .collect();
-            (
-                0.0,
+            ScanRecord {
+                t: 0.0,
                 obs,
-                if walls { sighting } else { None },
-                Pose::default(),
-            )
+                walls: if walls { sighting } else { None },
+                believed: Pose::default(),
+                truth: Pose::default(),
+            }
         };
         let r = Recognised {
             hits: BTreeMap::new(),
@@ -657,7 +718,7 @@ mod tests {
         };
         let mut points = Pqrm::new(Calculus::builtin("left-right").unwrap(), config).unwrap();
         points
-            .update(&Scan::new(0.0, 0, r.per_frame[0].1.clone()).unwrap())
+            .update(&Scan::new(0.0, 0, r.per_frame[0].obs.clone()).unwrap())
             .unwrap();
         let mut walled = Pqrm::new(wall_calculus().unwrap(), config).unwrap();
         let frame = vec![

@@ -75,7 +75,7 @@ impl<'m> LidarPerception<'m> {
             field,
             ahead,
             sweep,
-            extractor: ExtractorConfig::default(),
+            extractor: field.extractor,
             mapped: field.map.landmarks().into_iter().collect(),
             state: Mutex::new(LidarState {
                 rng: ChaCha8Rng::seed_from_u64(seed),
