@@ -494,4 +494,33 @@ fn a_world_too_sparse_to_plan_in_is_reported_not_refused() {
             c.verdict
         );
     }
+    // the map's size differs with a why measured on this world and these settings (it said
+    // "over more landmarks" and "clutter the extractor takes for trunks" whatever the map)
+    let landmarks = report
+        .claims
+        .iter()
+        .find(|c| c.what == "the field map's point landmarks")
+        .unwrap();
+    let s = &world.mapping;
+    if landmarks.verdict == studies::Verdict::Disagree {
+        let want = format!(
+            "the drive recognised {} of the world's {} landmarks in at least 5 scans \
+             (extracted as landmarks up to 1 m in radius), and {} false ids",
+            s.real_landmarks, s.world_landmarks, s.false_landmarks
+        );
+        assert_eq!(landmarks.why, want);
+    }
+    let elements = report
+        .claims
+        .iter()
+        .find(|c| c.what == "the field map's elements")
+        .unwrap();
+    assert!(
+        elements.verdict == studies::Verdict::Agree
+            || elements
+                .why
+                .contains(&format!("over {} mapped ids against its 25", s.mapped_ids)),
+        "{}",
+        elements.why
+    );
 }

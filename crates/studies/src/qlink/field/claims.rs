@@ -681,9 +681,11 @@ fn map_size_claims(config: &FieldParams, output: &FieldOutput) -> Vec<Claim> {
             } else {
                 format!(
                     "our maps keep {}: {per:.1} elements per landmark on average against the \
-                     thesis's {:.1}, over more landmarks (see the map's size)",
+                     thesis's {:.1}, over {} mapped ids against its {THESIS_POINT_LANDMARKS} \
+                     (see the map's size)",
                     config.elements.rule(config.min_observations),
-                    THESIS_ELEMENTS as f64 / THESIS_POINT_LANDMARKS as f64
+                    THESIS_ELEMENTS as f64 / THESIS_POINT_LANDMARKS as f64,
+                    span(ids)
                 )
             },
         },
@@ -700,10 +702,13 @@ fn map_size_claims(config: &FieldParams, output: &FieldOutput) -> Vec<Claim> {
                 String::new()
             } else {
                 format!(
-                    "the ids recognised in enough scans of the drive: {} of them real \
-                     landmarks; the rest are rocks and bushes (clutter), which the extractor \
-                     takes for trunks as the thesis's took windows and roadway",
-                    span(world_range(output, |w| w.mapping.real_landmarks).unwrap_or((0, 0)))
+                    "the drive recognised {} of the world's {} landmarks in at least {} scans \
+                     (extracted as landmarks up to {} m in radius), and {} false ids",
+                    span(world_range(output, |w| w.mapping.real_landmarks).unwrap_or((0, 0))),
+                    span(world_range(output, |w| w.mapping.world_landmarks).unwrap_or((0, 0))),
+                    config.min_landmark_scans,
+                    config.max_landmark_radius,
+                    span(false_ids)
                 )
             },
         },
