@@ -69,6 +69,34 @@ pub fn thesis_plan_len(transitions: usize) -> usize {
     transitions + 1
 }
 
+/// The success claim's why: the rule, and where the pooled rate differs, the worlds' own
+/// rates (`per_world`, thesis set-up) — the thesis measured one site, and ours differ from
+/// world to world.
+fn success_why(agree: bool, per_world: &[f64]) -> String {
+    let rule = "agree when ours lies in the Wilson 95 % interval of the thesis's 18 trials";
+    let (Some(lo), Some(hi)) = (
+        per_world.iter().copied().reduce(f64::min),
+        per_world.iter().copied().reduce(f64::max),
+    ) else {
+        return rule.into();
+    };
+    if agree {
+        return rule.into();
+    }
+    let th = THESIS_IN_VIVO;
+    let theirs = th.successes as f64 / th.trials as f64;
+    let inside = (lo..=hi).contains(&theirs);
+    format!(
+        "{rule}; our {} world(s) succeed {:.1}–{:.1} % of their runs, so the thesis's one site \
+         at {:.0} % is {} the range of our sites",
+        per_world.len(),
+        100.0 * lo,
+        100.0 * hi,
+        100.0 * theirs,
+        if inside { "within" } else { "outside" }
+    )
+}
+
 /// Attempts (trials with a path) and successes of a pooled summary.
 fn attempts(s: &FieldSummary) -> (usize, usize) {
     (s.successes, s.trials - s.no_path)
@@ -95,7 +123,19 @@ pub(super) fn claims(config: &FieldParams, output: &FieldOutput) -> Vec<Claim> {
         ),
         ours: format!("{k} of {n} ({:.1} %)", 100.0 * ours.success_rate),
         verdict: Verdict::agree_if((lo..=hi).contains(&ours.success_rate)).over(n),
-        why: "agree when ours lies in the Wilson 95 % interval of the thesis's 18 trials".into(),
+        why: success_why(
+            (lo..=hi).contains(&ours.success_rate),
+            &output
+                .worlds
+                .iter()
+                .filter_map(|w| {
+                    w.variants
+                        .iter()
+                        .find(|s| s.variant == FieldVariant::Thesis && s.judged() > 0)
+                        .map(|s| s.success_rate)
+                })
+                .collect::<Vec<_>>(),
+        ),
     });
     let insufficient = ours.insufficient_features + ours.insufficient_features_and_aliasing;
     claims.push(Claim {
@@ -865,6 +905,21 @@ mod tests {
 
     /// The rise is judged on the thesis's reading (steepest across |P| = 5) and through the
     /// means' noise: a steepest step within it is not a dramatic increase.
+    #[test]
+    fn a_success_rate_that_differs_names_the_worlds_own_rates() {
+        let why = success_why(false, &[0.694, 0.975, 0.904]);
+        assert!(
+            why.ends_with(
+                "our 3 world(s) succeed 69.4–97.5 % of their runs, so the thesis's one site at \
+                 72 % is within the range of our sites"
+            ),
+            "{why}"
+        );
+        assert!(success_why(false, &[0.9, 0.95]).ends_with("outside the range of our sites"));
+        assert!(!success_why(true, &[0.9]).contains("world"));
+        assert!(!success_why(false, &[]).contains("world"));
+    }
+
     #[test]
     fn the_rise_across_five_is_the_steepest_step_beyond_noise_only() {
         // three paths per |P| at each mean, ± `spread`
