@@ -157,13 +157,31 @@ pub(super) fn claims(config: &FieldParams, output: &FieldOutput) -> Vec<Claim> {
         verdict: Verdict::agree_if(insufficient > ours.perceptual_aliasing).over(n - k),
         why: String::new(),
     });
-    claims.push(ground_claim(
+    let mut ground = ground_claim(
         &output
             .trials()
             .filter(|(_, t)| t.variant == FieldVariant::Thesis)
             .map(|(_, t)| (t.result, t.final_ground_share))
             .collect::<Vec<_>>(),
-    ));
+    );
+    if ground.verdict == Verdict::Disagree {
+        let runs: Vec<(FieldResult, usize, usize)> = output
+            .worlds
+            .iter()
+            .flat_map(|w| {
+                w.trials
+                    .iter()
+                    .filter(|t| {
+                        t.variant == FieldVariant::Thesis && t.result != FieldResult::NoPath
+                    })
+                    .map(|t| (t.result, t.detections, w.map_size.elements))
+            })
+            .collect();
+        if let Some(why) = features_why(&runs) {
+            ground.why = format!("{}; {why}", ground.why);
+        }
+    }
+    claims.push(ground);
     claims.push(replanning_claim(
         ours,
         &output
@@ -507,6 +525,36 @@ fn ground_claim(trials: &[(FieldResult, f64)]) -> Claim {
               by more than the noise (Welch z > 1.96)"
             .into(),
     }
+}
+
+/// Where the runs that failed for insufficient features were, measured: the landmarks they
+/// detected per run against the successes', and how many of them ran in the world(s) whose map
+/// has the fewest elements against how many runs did. `runs`: (result, detections, its world's
+/// map elements) of the thesis set-up's planned runs. `None` without a failure and a success.
+fn features_why(runs: &[(FieldResult, usize, usize)]) -> Option<String> {
+    let failed = |r: FieldResult| {
+        matches!(
+            r,
+            FieldResult::InsufficientFeatures | FieldResult::InsufficientFeaturesAndAliasing
+        )
+    };
+    let mean = |f: &dyn Fn(FieldResult) -> bool| {
+        let v: Vec<f64> = runs.iter().filter(|t| f(t.0)).map(|t| t.1 as f64).collect();
+        (!v.is_empty()).then(|| (v.iter().sum::<f64>() / v.len() as f64, v.len()))
+    };
+    let (df, nf) = mean(&failed)?;
+    let (ds, _) = mean(&|r| r == FieldResult::Success)?;
+    let thinnest = runs.iter().map(|t| t.2).min()?;
+    let there =
+        |f: &dyn Fn(FieldResult) -> bool| runs.iter().filter(|t| t.2 == thinnest && f(t.0)).count();
+    Some(format!(
+        "the runs that failed for insufficient features detected {df:.0} landmarks per run \
+         against {ds:.0} in the successes, and {} of those {nf} ran in the world(s) whose map \
+         has the fewest elements ({thinnest}), where {} of all {} runs did",
+        there(&failed),
+        there(&|_| true),
+        runs.len()
+    ))
 }
 
 /// Mean and sample standard deviation of `v` (`None` below two values).
@@ -905,6 +953,28 @@ mod tests {
 
     /// The rise is judged on the thesis's reading (steepest across |P| = 5) and through the
     /// means' noise: a steepest step within it is not a dramatic increase.
+    #[test]
+    fn failures_for_want_of_features_say_where_they_were() {
+        use FieldResult::{InsufficientFeatures as F, PerceptualAliasing as A, Success as S};
+        let runs = [
+            (F, 10, 11),
+            (F, 20, 11),
+            (F, 30, 40),
+            (S, 50, 40),
+            (S, 70, 40),
+            (S, 60, 11),
+            (A, 99, 11),
+        ];
+        assert_eq!(
+            features_why(&runs).unwrap(),
+            "the runs that failed for insufficient features detected 20 landmarks per run \
+             against 60 in the successes, and 2 of those 3 ran in the world(s) whose map has \
+             the fewest elements (11), where 4 of all 7 runs did"
+        );
+        assert!(features_why(&[(S, 5, 3)]).is_none());
+        assert!(features_why(&[(F, 5, 3)]).is_none());
+    }
+
     #[test]
     fn a_success_rate_that_differs_names_the_worlds_own_rates() {
         let why = success_why(false, &[0.694, 0.975, 0.904]);
