@@ -375,21 +375,31 @@ impl Robot {
     /// ```
     /// use qlink::Robot;
     /// let drive: Vec<[f64; 3]> = (0..=100).map(|i| [f64::from(i), 0.0, 0.0]).collect();
-    /// assert_eq!(Robot::EXACT.odometry(&drive, 0), drive);
-    /// let believed = Robot::default().with_seed(3).odometry(&drive, 0);
+    /// assert_eq!(Robot::EXACT.odometry(&drive, 0)?, drive);
+    /// let believed = Robot::default().with_seed(3).odometry(&drive, 0)?;
     /// assert_eq!(believed[0], drive[0]); // it starts where it is
     /// assert_ne!(believed[100], drive[100]); // and drifts
+    /// # Ok::<(), qlink::QlinkError>(())
     /// ```
-    #[must_use]
-    pub fn odometry(&self, poses: &[[f64; 3]], drive: u64) -> Vec<[f64; 3]> {
+    ///
+    /// # Errors
+    /// [`QlinkError::InvalidParameter`] naming the pose: a coordinate or heading that is not
+    /// finite, or a move so large that the believed pose is not (past about 10¹⁵⁴ m).
+    pub fn odometry(&self, poses: &[[f64; 3]], drive: u64) -> Result<Vec<[f64; 3]>> {
+        if let Some(i) = poses.iter().position(|p| !p.iter().all(|v| v.is_finite())) {
+            return Err(QlinkError::InvalidParameter(format!(
+                "odometry: pose {i} of the drive, {:?}, is not finite",
+                poses[i]
+            )));
+        }
         let m = self.motion;
         if m.is_exact() {
-            return poses.to_vec();
+            return Ok(poses.to_vec());
         }
         let run = run_key(self.seed, &[drive]);
         let mut out = Vec::with_capacity(poses.len());
         let Some(&first) = poses.first() else {
-            return out;
+            return Ok(out);
         };
         let mut believed = first;
         out.push(believed);
@@ -415,9 +425,18 @@ impl Robot {
                 believed[1] + k * (s * local[0] + c * local[1]),
                 believed[2] + turn + heading_error,
             ];
+            if !believed.iter().all(|v| v.is_finite()) {
+                return Err(QlinkError::InvalidParameter(format!(
+                    "odometry: the move to pose {} of the drive ({:?} from {:?}) is too large \
+                     to integrate",
+                    i + 1,
+                    w[1],
+                    w[0]
+                )));
+            }
             out.push(believed);
         }
-        out
+        Ok(out)
     }
 }
 
@@ -486,7 +505,7 @@ mod tests {
         let robot = Robot::default().with_seed(11);
         let (mut headings, mut lengths) = (Vec::new(), Vec::new());
         for key in 0..2000 {
-            let b = robot.odometry(&drive, key);
+            let b = robot.odometry(&drive, key).unwrap();
             assert_eq!(b.len(), drive.len());
             headings.push(b[400][2]);
             lengths.push(
@@ -514,10 +533,25 @@ mod tests {
             "length spread {l} of the configured"
         );
         // the same key drifts the same way; turning on the spot adds no error
-        assert_eq!(robot.odometry(&drive, 5), robot.odometry(&drive, 5));
+        assert_eq!(
+            robot.odometry(&drive, 5).unwrap(),
+            robot.odometry(&drive, 5).unwrap()
+        );
         let spin = [[1.0, 2.0, 0.0], [1.0, 2.0, 1.0], [1.0, 2.0, -2.0]];
-        assert_eq!(robot.odometry(&spin, 0), spin.to_vec());
-        assert!(robot.odometry(&[], 0).is_empty());
+        assert_eq!(robot.odometry(&spin, 0).unwrap(), spin.to_vec());
+        assert!(robot.odometry(&[], 0).unwrap().is_empty());
+        // bad drives are refused by pose, by the exact robot too
+        for r in [robot, Robot::EXACT] {
+            let nan = [[0.0, 0.0, 0.0], [1.0, f64::NAN, 0.0]];
+            let err = r.odometry(&nan, 0).unwrap_err().to_string();
+            assert!(
+                err.contains("pose 1") && err.contains("not finite"),
+                "{err}"
+            );
+        }
+        let huge = [[-1e308, 0.0, 0.0], [1e308, 0.0, 0.0]];
+        let err = robot.odometry(&huge, 0).unwrap_err().to_string();
+        assert!(err.contains("pose 1") && err.contains("too large"), "{err}");
     }
 
     #[test]

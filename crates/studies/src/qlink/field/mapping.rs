@@ -405,17 +405,17 @@ fn visibility(map: &QualitativeMap, r: &Recognised) -> BTreeMap<u32, f64> {
 /// The mapping drive's poses as its odometry has them ([`qlink::Robot::odometry`] of the
 /// field's robot; the exact robot's are the true poses): the wall model's heading and ends
 /// come from these, never from where the robot truly was.
-fn drive_odometry(frames: &[sim2d::Frame], params: &FieldParams) -> Vec<Pose> {
+fn drive_odometry(frames: &[sim2d::Frame], params: &FieldParams) -> Result<Vec<Pose>> {
     let truth: Vec<[f64; 3]> = frames
         .iter()
         .map(|f| [f.pose.x, f.pose.y, f.pose.theta])
         .collect();
-    params
+    Ok(params
         .navigating_robot()
-        .odometry(&truth, 0)
+        .odometry(&truth, 0)?
         .into_iter()
         .map(|[x, y, theta]| Pose { x, y, theta })
-        .collect()
+        .collect())
 }
 
 /// Maps the field site with the lidar (see the module docs).
@@ -432,7 +432,7 @@ pub fn map_field(params: &FieldParams) -> Result<FieldMap> {
     let mut recognizer = TriangleRecognizer::new(params.tolerance).with_min_votes(params.min_votes);
     let var = params.sigma * params.sigma;
     let cov = [[var, 0.0], [0.0, var]];
-    let believed = drive_odometry(&frames, params);
+    let believed = drive_odometry(&frames, params)?;
     let mut r = recognise(
         &frames,
         &believed,
