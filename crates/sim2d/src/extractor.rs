@@ -9,7 +9,8 @@
 //!    scanner and scaled to the scan's resolution, at least three), or one with a corner
 //!    (a point farther than `corner_distance` from the chord), is a point-landmark candidate
 //!    if its returns bulge like an arc (farthest point ≥ 10 % of the chord from it) and fit in
-//!    a landmark's diameter (`2·max_radius`);
+//!    a landmark's diameter (`2·max_radius`) — unless its returns lie on one circle bigger than
+//!    `max_radius` (a bush, a rock: round, but no landmark, however far its arc bulges);
 //!    a long straight cluster (longer than `wall_length`, all points within `wall_residual` of
 //!    the chord) is a wall candidate.
 //! 3. **Centre.** A circle fit (algebraic, Kåsa) of the cluster, kept when its radius is
@@ -45,7 +46,8 @@ pub struct ExtractorConfig {
     pub wall_length: f64,
     /// Largest distance of a wall point from its chord (m).
     pub wall_residual: f64,
-    /// Largest plausible landmark radius for the circle fit (m).
+    /// Largest plausible landmark radius (m): for the circle fit, the size check, and the
+    /// round objects that are not landmarks (bigger than this).
     pub max_radius: f64,
     /// The angular resolution (rad) `min_points` and `max_points` are stated for. A scan of
     /// another resolution scales both by `points_resolution / its resolution` (the minimum
