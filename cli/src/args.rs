@@ -300,9 +300,11 @@ pub struct MapArgs {
     pub noise: NoiseArgs,
     /// Drop gross outliers frame by frame (a detection whose distances to the frame's other
     /// landmarks disagree with those pairs' medians by more than 3σ of the fitted noise); the
-    /// count goes into summary.json.
-    #[arg(long)]
-    pub gate: bool,
+    /// count goes into summary.json. Default: on where the noise is fitted from the recording
+    /// (MRCLAM's `--noise auto`: every fold of leaving one MRCLAM recording out chose it,
+    /// docs/calibration.md), off elsewhere; `--gate false` keeps every detection.
+    #[arg(long, num_args = 0..=1, default_missing_value = "true", action = clap::ArgAction::Set)]
+    pub gate: Option<bool>,
     /// Samples per landmark per step.
     #[arg(long, default_value_t = 1000)]
     pub samples: usize,

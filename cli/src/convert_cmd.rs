@@ -24,6 +24,10 @@ pub struct ConvertArgs {
     /// recording does.
     #[command(flatten)]
     pub noise: crate::flags::NoiseArgs,
+    /// Drop gross outliers frame by frame before writing, as `qrm map` does (default: where the
+    /// noise is fitted from the recording; `--gate false` keeps every detection).
+    #[arg(long, num_args = 0..=1, default_missing_value = "true", action = clap::ArgAction::Set)]
+    pub gate: Option<bool>,
     /// The MCAP file to write.
     #[arg(long)]
     pub out: PathBuf,
@@ -40,6 +44,7 @@ pub fn run(a: ConvertArgs) -> Result<()> {
     if let Some(t) = &a.truth {
         data.truth = Some(read_truth_csv(t)?);
     }
+    let gated = studies::mapping::gate(&mut data, a.gate, noise.fit.as_ref())?;
     // Written beside the target and renamed when finished: a failure or Ctrl-C never leaves a
     // half-written file under the final name.
     let file = crate::output::stage_file(&a.out)?;
@@ -47,7 +52,7 @@ pub fn run(a: ConvertArgs) -> Result<()> {
     file.commit()?;
     let robots: std::collections::BTreeSet<u32> = data.scans.iter().map(|s| s.robot).collect();
     outln!(
-        "{}: {} scans of {} robot(s){}; wrote {}",
+        "{}: {} scans of {} robot(s){}{}; wrote {}",
         a.input.display(),
         data.scans.len(),
         robots.len(),
@@ -56,6 +61,10 @@ pub fn run(a: ConvertArgs) -> Result<()> {
         } else {
             ""
         },
+        gated.map_or(String::new(), |g| format!(
+            " ({} of {} detections gated as gross outliers)",
+            g.detections, g.of
+        )),
         a.out.display()
     )?;
     Ok(())

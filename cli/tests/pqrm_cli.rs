@@ -693,6 +693,26 @@ fn gating_drops_a_few_detections_and_says_how_many() {
         v["gated"]["of"].as_u64().unwrap(),
     );
     assert!(g > 0 && (g as f64) < 0.05 * of as f64, "{g} of {of}");
+    // issue 35: gating is the default where the noise is fitted (every fold of leaving one
+    // MRCLAM recording out chose it); `--gate false` keeps every detection
+    let map = |extra: &[&str]| -> serde_json::Value {
+        let mut args = vec![
+            "map",
+            "--format",
+            "mrclam",
+            "--input",
+            data.to_str().unwrap(),
+            "--samples",
+            "100",
+            "--out",
+            out.to_str().unwrap(),
+        ];
+        args.extend_from_slice(extra);
+        serde_json::from_str(&ok(&args, "")).unwrap()
+    };
+    assert_eq!(map(&[])["gated"], v["gated"]);
+    assert!(map(&["--gate", "false"]).get("gated").is_none());
+    assert!(map(&["--noise", "fixed"]).get("gated").is_none());
     std::fs::remove_dir_all(&out).ok();
 }
 

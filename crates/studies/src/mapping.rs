@@ -128,6 +128,37 @@ pub fn possible_ordered_sets(scans: &[pqrm::Scan]) -> u64 {
     ordered(distinct.len() as u64).min(per_scan)
 }
 
+/// Drops gross outliers frame by frame (3σ of the noise fit; [`pqrm::calibrate::gate_outliers`])
+/// when `gate` asks for it — by default (`None`) where the noise was fitted from the recording
+/// (`fit`: MRCLAM's `--noise auto`), which leaving one MRCLAM recording out chose in every fold
+/// (docs/calibration.md). One rule for `qrm map` and `qrm convert`, so a converted log maps as
+/// the recording does. Returns what was dropped, `None` when not gated.
+///
+/// # Errors
+/// [`StudyError::InvalidParameter`] when gating was asked for and the noise cannot be fitted.
+pub fn gate(
+    data: &mut Dataset,
+    gate: Option<bool>,
+    fit: Option<&pqrm::calibrate::NoiseFit>,
+) -> Result<Option<pqrm::calibrate::Gated>> {
+    if !gate.unwrap_or(fit.is_some()) {
+        return Ok(None);
+    }
+    let fitted;
+    let fit = match fit {
+        Some(f) => f,
+        None => {
+            fitted = pqrm::calibrate::fit_noise(data).map_err(|e| {
+                StudyError::InvalidParameter(format!("fitting the noise for --gate: {e}"))
+            })?;
+            &fitted
+        }
+    };
+    let (kept, gated) = pqrm::calibrate::gate_outliers(data, fit, 3.0);
+    data.scans = kept.scans;
+    Ok(Some(gated))
+}
+
 /// What to map and how (stage two of a front end's parsing: every field checked or checkable
 /// before work).
 #[derive(Debug, Clone)]
@@ -142,8 +173,10 @@ pub struct MapJob {
     pub noise: NoiseRequest,
     /// How an MCAP log is read (topics, ranges, lidar extraction, damage).
     pub log: qrm_log::ReadOptions,
-    /// Drop gross outliers frame by frame (3σ of the fitted noise).
-    pub gate: bool,
+    /// Drop gross outliers frame by frame (3σ of the fitted noise). `None`: where the noise is
+    /// fitted from the recording (MRCLAM's `--noise auto`, the default there) — leaving one
+    /// MRCLAM recording out chose it in every fold (docs/calibration.md) — and not elsewhere.
+    pub gate: Option<bool>,
     /// Only these robots' scans (empty: all).
     pub robots: Vec<u32>,
     /// The calculus.
@@ -252,15 +285,7 @@ impl MapJob {
         if let Some(fit) = &fit {
             reading.insert("noise_fit".into(), json!(fit));
         }
-        if self.gate {
-            let fit = match fit {
-                Some(f) => f,
-                None => pqrm::calibrate::fit_noise(&data).map_err(|e| {
-                    StudyError::InvalidParameter(format!("fitting the noise for --gate: {e}"))
-                })?,
-            };
-            let (kept, gated) = pqrm::calibrate::gate_outliers(&data, &fit, 3.0);
-            data.scans = kept.scans;
+        if let Some(gated) = gate(&mut data, self.gate, fit.as_ref())? {
             reading.insert("gated".into(), json!(gated));
         }
         self.keep_robots(&mut data)?;
