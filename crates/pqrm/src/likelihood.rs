@@ -271,7 +271,24 @@ pub fn step_counts(
     samples: &ScanSamples,
     orderings: Orderings,
 ) -> Result<StepCounts> {
-    step_counts_with(calculus, samples, orderings, Kernel::FAST)
+    let mut out = StepCounts::default();
+    step_counts_with(calculus, samples, orderings, Kernel::FAST, &mut out)?;
+    Ok(out)
+}
+
+/// [`step_counts`] into the tables of an earlier step's counts, reused: a map's steps then
+/// write into memory they already hold instead of a fresh table each (for 10⁶ sets, 90 MB a
+/// step that the kernel would first have to fault in — 7 % of mapping them).
+///
+/// # Errors
+/// As [`step_counts`]; `out` then holds no meaningful counts.
+pub fn step_counts_into(
+    calculus: &Calculus,
+    samples: &ScanSamples,
+    orderings: Orderings,
+    out: &mut StepCounts,
+) -> Result<()> {
+    step_counts_with(calculus, samples, orderings, Kernel::FAST, out)
 }
 
 /// Which fast paths a step takes — all of them but in the tests that compare each with the
@@ -299,7 +316,8 @@ fn step_counts_with(
     samples: &ScanSamples,
     orderings: Orderings,
     kernel: Kernel,
-) -> Result<StepCounts> {
+    out: &mut StepCounts,
+) -> Result<()> {
     let ids = samples.ids();
     let m = ids.len();
     let q = calculus.n_states();
@@ -320,7 +338,14 @@ fn step_counts_with(
         .flat_map(|i| (i + 1..m).map(move |j| (i, j)))
         .collect();
     let n_sets: usize = pairs.iter().map(|&(_, j)| (m - j - 1) * n_orders).sum();
-    let mut sets = Vec::with_capacity(n_sets);
+    let StepCounts {
+        n_states,
+        sets,
+        counts,
+    } = out;
+    *n_states = q;
+    sets.clear();
+    sets.reserve_exact(n_sets);
     for &(i, j) in &pairs {
         for k in j + 1..m {
             let [a, b, c] = [ids[i], ids[j], ids[k]];
@@ -335,7 +360,10 @@ fn step_counts_with(
             sets.extend(six.into_iter().take(n_orders).map(LandmarkSet));
         }
     }
-    let mut counts = vec![0u32; n_sets * q];
+    // every triplet writes all its counts (`triplet_counts`), so a reused table needs no
+    // clearing: only growing or shrinking to this step's size
+    counts.truncate(n_sets * q);
+    counts.resize(n_sets * q, 0);
     // each pair's slice of the table: (m − j − 1) triplets × n_orders histograms
     let mut slices = Vec::with_capacity(pairs.len());
     let mut rest = counts.as_mut_slice();
@@ -366,11 +394,20 @@ fn step_counts_with(
             }
             Ok::<(), PqrmError>(())
         })?;
-    Ok(StepCounts {
-        n_states: q,
-        sets,
-        counts,
-    })
+    Ok(())
+}
+
+/// [`step_counts_with`] into a new table (the tests' form).
+#[cfg(test)]
+fn counts_with(
+    calculus: &Calculus,
+    samples: &ScanSamples,
+    orderings: Orderings,
+    kernel: Kernel,
+) -> Result<StepCounts> {
+    let mut out = StepCounts::default();
+    step_counts_with(calculus, samples, orderings, kernel, &mut out)?;
+    Ok(out)
 }
 
 /// Each landmark's samples' disc and largest squared norm ([`Spread`]; `None` where a sample
@@ -392,6 +429,8 @@ struct Scratch {
     /// Sign-key histogram, four interleaved lanes per key: `HIST_BINS` long once used (a
     /// fixed length, so that a masked key needs no bounds check).
     hist: Vec<[u32; 4]>,
+    /// Whether `hist` may hold counts (a triplet stopped by an error before folding them).
+    hist_dirty: bool,
     /// One chunk of samples in the base frame (`x`, `y`, `n`) and their keys: kept here, not
     /// zeroed on the stack for every triplet.
     frame: Vec<[[f64; CHUNK]; 3]>,
@@ -1022,16 +1061,18 @@ fn fill_keys(forms: &SixForms, key: &mut [u64], x: &[f64], y: &[f64], n: &[f64])
     }
 }
 
-/// The histogram of keys without a zero quantity, folded into each ordering's state counts.
+/// The histogram of keys without a zero quantity, folded into each ordering's state counts
+/// and left zeroed for the next triplet (one pass instead of a fold and a fill).
 #[inline(always)]
 fn fold_histogram<const ORDERS: usize>(
     forms: &SixForms,
-    hist: &[[u32; 4]],
+    hist: &mut [[u32; 4]],
     q: usize,
     out: &mut [u32],
 ) {
-    for (kv, lanes) in hist.iter().enumerate() {
+    for (kv, lanes) in hist.iter_mut().enumerate() {
         let n: u32 = lanes.iter().sum();
+        *lanes = [0; 4];
         if n > 0 {
             for (o, c) in out.chunks_exact_mut(q).enumerate().take(ORDERS) {
                 c[usize::from(forms.states[kv][o])] += n;
@@ -1040,8 +1081,80 @@ fn fold_histogram<const ORDERS: usize>(
     }
 }
 
-/// Counts one chunk's keys: a key without a zero quantity into the histogram (four lanes),
-/// one with a zero quantity straight into `out` through the constraints' zero sides.
+/// A triplet's key counts. A chunk whose samples all share one key with no zero quantity
+/// (as the chunks of a triplet do that sits far from its boundaries for its landmarks'
+/// noise, yet not far enough for the discs to settle it) is one addition to a *run*: a
+/// vectorised pass over the keys instead of a read-modify-write per sample (that loop was
+/// about half of the canonical kernel's time). A triplet whose chunks are all one run never
+/// touches the histogram, so it is neither folded nor cleared. Checking blocks of 64 or 128
+/// samples instead of whole chunks was slower on `map_scaling.py`'s scene: a mixed chunk
+/// pays for every check.
+struct KeyTally<'h> {
+    /// Zero between triplets ([`fold_histogram`] clears what it reads).
+    hist: &'h mut [[u32; 4]; HIST_BINS],
+    /// The current run's key and count.
+    run: Option<(usize, u32)>,
+    /// Whether anything went into the histogram.
+    used: bool,
+}
+
+impl KeyTally<'_> {
+    /// Counts one chunk's keys: a pure chunk into the run, else each key without a zero
+    /// quantity into the histogram (four lanes), one with a zero quantity straight into
+    /// `out` through the constraints' zero sides.
+    #[inline(always)]
+    fn chunk<const ORDERS: usize>(
+        &mut self,
+        forms: &SixForms,
+        table: (&[u16], usize),
+        key: &[u64],
+        signs: &mut [i8],
+        out: &mut [u32],
+    ) {
+        let Some(&first) = key.first() else {
+            return;
+        };
+        let differ = key.iter().fold(0u64, |acc, &kv| acc | (kv ^ first));
+        if differ == 0 && first >> 32 == 0 {
+            // a chunk is at most CHUNK samples long
+            let (kv, n) = (first as usize & (HIST_BINS - 1), key.len() as u32);
+            match &mut self.run {
+                Some((k, c)) if *k == kv => *c += n,
+                run => {
+                    if let Some((k, c)) = run.replace((kv, n)) {
+                        self.hist[k][0] += c;
+                        self.used = true;
+                    }
+                }
+            }
+            return;
+        }
+        self.used = true;
+        count_keys::<ORDERS>(forms, table, key, self.hist, signs, out);
+    }
+
+    /// Adds the triplet's counts to `out` (each ordering's states) and leaves the histogram
+    /// zeroed.
+    #[inline(always)]
+    fn finish<const ORDERS: usize>(self, forms: &SixForms, q: usize, out: &mut [u32]) {
+        let g = forms.quantities.len();
+        if let Some((k, c)) = self.run {
+            if !self.used {
+                for (o, counts) in out.chunks_exact_mut(q).enumerate().take(ORDERS) {
+                    counts[usize::from(forms.states[k][o])] += c;
+                }
+                return;
+            }
+            self.hist[k][0] += c;
+        }
+        if self.used {
+            fold_histogram::<ORDERS>(forms, &mut self.hist[..1 << g], q, out);
+        }
+    }
+}
+
+/// Counts one chunk's keys into the histogram (four lanes), a key with a zero quantity
+/// straight into `out` through the constraints' zero sides.
 #[inline(always)]
 fn count_keys<const ORDERS: usize>(
     forms: &SixForms,
@@ -1114,7 +1227,16 @@ fn six_counts<const ORDERS: usize>(
             "six_counts: histogram size".into(),
         ));
     };
-    hist[..1 << g].fill([0u32; 4]);
+    if scratch.hist_dirty {
+        // a triplet left it mid-way (an error): clear it once
+        hist.fill([0u32; 4]);
+    }
+    scratch.hist_dirty = true;
+    let mut tally = KeyTally {
+        hist,
+        run: None,
+        used: false,
+    };
     out.fill(0);
     let ((ax, ay), (bx, by), (cx, cy)) =
         (samples.columns(i), samples.columns(j), samples.columns(k));
@@ -1149,7 +1271,7 @@ fn six_counts<const ORDERS: usize>(
             if !valid {
                 check_apart::<ORDERS>(samples, [i, j, k], start..start + len)?;
             }
-            count_keys::<ORDERS>(forms, (table, q), &keys[..len], hist, &mut signs, out);
+            tally.chunk::<ORDERS>(forms, (table, q), &keys[..len], &mut signs, out);
             continue;
         }
         let mut valid = true;
@@ -1170,9 +1292,10 @@ fn six_counts<const ORDERS: usize>(
         let key = &mut keys[..len];
         key.fill(0);
         fill_keys(forms, key, x, y, n);
-        count_keys::<ORDERS>(forms, (table, q), key, hist, &mut signs, out);
+        tally.chunk::<ORDERS>(forms, (table, q), key, &mut signs, out);
     }
-    fold_histogram::<ORDERS>(forms, &hist[..1 << g], q, out);
+    tally.finish::<ORDERS>(forms, q, out);
+    scratch.hist_dirty = false;
     Ok(())
 }
 
@@ -1275,6 +1398,82 @@ mod tests {
         );
     }
 
+    /// Pure chunks are counted as runs (a run of one key, then another, then mixed chunks
+    /// around and between them) exactly as counting every key into the histogram counts
+    /// them, and the histogram is left zeroed for the next triplet either way.
+    #[test]
+    fn runs_of_pure_chunks_count_as_their_keys_do() {
+        use super::{CHUNK, HIST_BINS, KeyTally, SixForms, count_keys, fold_histogram};
+        let cal = qsr_core::Calculus::builtin("edc").expect("built in");
+        let qsr_core::Partition::Constraints(partition) = cal.partition() else {
+            panic!("edc is a constraint calculus");
+        };
+        let q = cal.n_states();
+        for orders in [6, 1] {
+            let forms = SixForms::new(&cal, orders).expect("edc has forms");
+            let g = forms.quantities.len();
+            let (a, b) = (3u64, (1u64 << g) - 2);
+            let pure = |k: u64, n: usize| vec![k; n];
+            let mixed: Vec<u64> = (0..CHUNK as u64)
+                .map(|t| match t % 5 {
+                    0 => a,
+                    1 => b,
+                    2 => 1u64 << 32 | 1, // quantity 0 exactly zero
+                    _ => t % (1 << g),
+                })
+                .collect();
+            let triplets: Vec<Vec<Vec<u64>>> = vec![
+                vec![pure(a, CHUNK), pure(a, CHUNK), pure(a, 100)],
+                vec![pure(a, CHUNK), pure(b, CHUNK), pure(a, 7)],
+                vec![pure(a, CHUNK), mixed.clone(), pure(a, CHUNK)],
+                vec![mixed.clone(), pure(b, CHUNK)],
+                vec![pure(b, 1)],
+                vec![pure(1u64 << 33, CHUNK)], // pure, but on a boundary
+            ];
+            let mut hist = Box::new([[0u32; 4]; HIST_BINS]);
+            for chunks in &triplets {
+                let mut signs = vec![0i8; g];
+                let mut got = vec![0u32; orders * q];
+                let mut tally = KeyTally {
+                    hist: &mut hist,
+                    run: None,
+                    used: false,
+                };
+                for c in chunks {
+                    tally.chunk::<6>(&forms, (partition.table(), q), c, &mut signs, &mut got);
+                }
+                tally.finish::<6>(&forms, q, &mut got);
+                assert!(hist.iter().all(|l| *l == [0; 4]), "left zeroed");
+                let mut want = vec![0u32; orders * q];
+                let mut reference = Box::new([[0u32; 4]; HIST_BINS]);
+                for c in chunks {
+                    count_keys::<6>(
+                        &forms,
+                        (partition.table(), q),
+                        c,
+                        &mut reference,
+                        &mut signs,
+                        &mut want,
+                    );
+                }
+                fold_histogram::<6>(&forms, &mut reference[..1 << g], q, &mut want);
+                assert_eq!(
+                    got,
+                    want,
+                    "{orders} orderings, chunks of {:?}",
+                    chunks.iter().map(Vec::len).collect::<Vec<_>>()
+                );
+                let total: u32 = want.iter().sum();
+                let samples: usize = chunks.iter().map(Vec::len).sum();
+                assert_eq!(
+                    total as usize,
+                    samples * orders,
+                    "every sample counted once per ordering"
+                );
+            }
+        }
+    }
+
     /// The fused loops give the pass-per-quantity loop's counts, bit for bit, for every
     /// built-in, both orderings, on samples that visit every state and on a lattice that puts
     /// samples exactly on boundaries.
@@ -1318,10 +1517,9 @@ mod tests {
                         fused: false,
                         decided: false,
                     };
-                    let fused =
-                        super::step_counts_with(&cal, &samples, orderings, fast).expect("apart");
+                    let fused = super::counts_with(&cal, &samples, orderings, fast).expect("apart");
                     let plain =
-                        super::step_counts_with(&cal, &samples, orderings, plain).expect("apart");
+                        super::counts_with(&cal, &samples, orderings, plain).expect("apart");
                     assert_eq!(fused.counts, plain.counts, "{name} {orderings:?}");
                     tried += 1;
                 }
@@ -1383,9 +1581,8 @@ mod tests {
                         decided: false,
                         ..super::Kernel::FAST
                     };
-                    let fast =
-                        super::step_counts_with(&cal, &samples, orderings, super::Kernel::FAST);
-                    let slow = super::step_counts_with(&cal, &samples, orderings, every);
+                    let fast = super::counts_with(&cal, &samples, orderings, super::Kernel::FAST);
+                    let slow = super::counts_with(&cal, &samples, orderings, every);
                     match (fast, slow) {
                         (Ok(fast), Ok(slow)) => {
                             assert_eq!(fast.counts, slow.counts, "{name} {orderings:?}");

@@ -105,7 +105,7 @@ pub fn evaluate(map: &Pqrm, truth: &GroundTruth) -> Result<MapMetrics> {
     let mut rank_hits = vec![0usize; q];
     for (set, belief) in map.iter() {
         let p = belief.probabilities();
-        ent += entropy(&p);
+        ent += belief.entropy();
         let Some(t) = truth.state(calculus, set)? else {
             continue;
         };

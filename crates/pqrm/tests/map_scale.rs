@@ -174,6 +174,14 @@ fn binary_and_json_round_trips_are_exact() {
     let via_json = Pqrm::from_json(&map.to_json().unwrap()).unwrap();
     assert_eq!(via_json.to_binary().unwrap(), bytes);
     assert_eq!(back.steps(), map.steps());
+    // the mean entropy is summed exactly: the loaded map's set order (not the mapped one's
+    // insertion order) and the thread count change no bit of it
+    assert_eq!(back.mean_entropy(), map.mean_entropy());
+    let one = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .unwrap();
+    assert_eq!(one.install(|| map.mean_entropy()), map.mean_entropy());
     for (set, b) in map.iter() {
         assert_eq!(back.get(set).unwrap(), b);
     }

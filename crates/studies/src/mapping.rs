@@ -375,6 +375,8 @@ impl MapJob {
             map.update(scan)?;
             progress.tick();
         }
+        // done growing: what is summarised and saved below has the memory
+        map.release_step_buffers();
         let robots: BTreeSet<u32> = data.scans.iter().map(|s| s.robot).collect();
         let mut summary = Map::new();
         let mut put = |k: &str, v: Value| {
