@@ -115,9 +115,24 @@ impl BeliefStore {
 
     /// Slots ordered by their sets (what users and files see).
     pub(crate) fn sorted_slots(&self) -> Vec<usize> {
-        let mut slots: Vec<usize> = (0..self.len()).collect();
-        slots.sort_unstable_by_key(|&s| self.index[s]);
-        slots
+        // sorted as packed keys beside their slots, not slots compared through the index:
+        // each comparison then reads the two elements it compares instead of two random
+        // entries of a 24-byte-per-set table (the sort was 4 % of mapping 10⁶ sets)
+        let mut keyed: Vec<(u128, usize)> = self
+            .index
+            .iter()
+            .enumerate()
+            .map(|(slot, set)| {
+                let [a, b, c] = set.ids();
+                (
+                    u128::from(a) << 64 | u128::from(b) << 32 | u128::from(c),
+                    slot,
+                )
+            })
+            .collect();
+        // keys are distinct (a set is recorded once), so an unstable sort is deterministic
+        keyed.sort_unstable_by_key(|&(key, _)| key);
+        keyed.into_iter().map(|(_, slot)| slot).collect()
     }
 
     /// Keeps the sets for which `keep` is true (slots stay in insertion order).
