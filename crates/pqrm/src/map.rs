@@ -249,7 +249,7 @@ impl Pqrm {
     }
 
     /// Frees the tables kept from one step to the next for the next one (about
-    /// `4·Q + 30` bytes per set of a step: as much again as the beliefs of a map whose
+    /// `4·Q + 38` bytes per set of a step: as much again as the beliefs of a map whose
     /// steps see every set). Call it when a map is done growing; the next step allocates
     /// them again.
     pub fn release_step_buffers(&mut self) {
