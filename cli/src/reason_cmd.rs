@@ -101,6 +101,10 @@ pub struct InferArgs {
     /// Weight of uniform mixed into each path (0 ≤ ε < 1).
     #[arg(long, default_value_t = pqrm::reason::InferOptions::default().epsilon)]
     pub epsilon: f64,
+    /// How a composition entry shares a path's probability among its states: `learned` (as
+    /// often as the map's own observed quadruples show each) or `uniform`.
+    #[arg(long, default_value = "learned")]
+    pub composition: pqrm::reason::Composition,
     /// Rounds of chained inference (round r composes what rounds before it inferred).
     #[arg(long, default_value_t = pqrm::reason::InferOptions::default().rounds)]
     pub rounds: usize,
@@ -537,6 +541,7 @@ fn infer(args: &InferArgs) -> Result<()> {
         fusion: args.fusion.into(),
         epsilon: args.epsilon,
         rounds: args.rounds,
+        composition: args.composition,
     };
     let mut inferrer = Inferrer::new(&map, options)?;
     let inferences = if args.sets.is_empty() {

@@ -56,6 +56,29 @@ def test_mrclam_through_python(mrclam_dir):
     assert m.metrics(truth)["error_rate"] < 5 / 6
 
 
+def test_mrclam_is_read_as_qrm_map_reads_it(mrclam_dir):
+    """Issue 35: by default the noise is fitted from the recording and gross outliers are
+    gated, as `qrm map` does; the old reading stays available by its flags."""
+    fitted, _ = qrm.read_observations(str(mrclam_dir), "mrclam")
+    plain, _ = qrm.read_observations(str(mrclam_dir), "mrclam", noise="fixed", gate=False)
+    asked, _ = qrm.read_observations(str(mrclam_dir), "mrclam", noise="auto", gate=True)
+    count = lambda scans: sum(len(s["ids"]) for s in scans)
+    # gating drops a few detections (Dataset 7: 121 of 16067), never most of them
+    assert count(plain) * 0.9 < count(fitted) < count(plain)
+    assert count(asked) == count(fitted)
+    # the fitted noise is not MRCLAM's fixed 0.15 m / 0.01 rad: covariances differ
+    by_key = {(s["t"], s["robot"]): s for s in plain}
+    same = [(s, by_key[(s["t"], s["robot"])]) for s in fitted if (s["t"], s["robot"]) in by_key]
+    assert same and any(not np.allclose(a["cov"][0], b["cov"][0]) for a, b in same if a["ids"][0] == b["ids"][0])
+    # given σs mean fixed noise, not gated unless asked
+    given, _ = qrm.read_observations(str(mrclam_dir), "mrclam", sigma_range=0.15, sigma_bearing=0.01)
+    assert count(given) == count(plain)
+    with pytest.raises(qrm.InvalidInput, match="noise"):
+        qrm.read_observations(str(mrclam_dir), "mrclam", noise="guess")
+    with pytest.raises(qrm.InvalidInput, match="noise auto"):
+        qrm.read_observations(str(mrclam_dir), "mrclam", noise="auto", sigma_range=0.2)
+
+
 def test_single_observation_matches_phi():
     lr = qrm.Calculus.builtin("left-right")
     p = qrm.single_observation(lr, np.array([[0.0, 0.0], [0.0, 10.0], [-1.0, 5.0]]), np.array([[0, 0, 0], [0, 0, 0], [1.0, 0, 1.0]]), samples=40000, seed=1)

@@ -64,6 +64,11 @@ def test_infer_predicts_a_set_never_seen_together():
     assert m.calculus.labels[int(np.argmax(p))] == "right-front"
     with pytest.raises(ValueError):
         m.infer((1, 2, 8), fusion="averaging")
+    # the composition shares: learned (default) and uniform both distributions; a typo refused
+    u = m.infer((1, 2, 8), rounds=3, composition="uniform")["p"]
+    assert abs(u.sum() - 1.0) < 1e-9
+    with pytest.raises(ValueError, match="composition"):
+        m.infer((1, 2, 8), composition="even")
 
 
 def test_check_of_a_clean_map_flags_nothing():

@@ -4,7 +4,6 @@ use std::collections::BTreeMap;
 use std::path::PathBuf;
 
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyReadonlyArray1, PyReadonlyArray2};
-use pqrm::loaders::RangeBearingNoise;
 use pqrm::study::{MonteCarloConfig, TrialRecord};
 use pqrm::{GroundTruth, LandmarkId, LandmarkSet, Observation, Orderings, PqrmConfig, Scan};
 use pyo3::prelude::*;
@@ -163,8 +162,9 @@ impl Pqrm {
     /// compose table (see `pqrm::reason`): {"p": array, "paths": int, "via": [ids], "round":
     /// int, "alpha": float}. A set the map observed is predicted from the observed beliefs; a
     /// set never observed is inferred as in the run over every unseen set (`rounds` of
-    /// chained composition), so the two agree.
-    #[pyo3(signature = (set, *, fusion = "fitted", epsilon = 0.01, rounds = 1))]
+    /// chained composition), so the two agree. `composition`: "learned" (each composition
+    /// entry's states shared as the map's own quadruples show them) or "uniform".
+    #[pyo3(signature = (set, *, fusion = "fitted", epsilon = 0.01, rounds = 1, composition = "learned"))]
     fn infer<'py>(
         &self,
         py: Python<'py>,
@@ -172,10 +172,13 @@ impl Pqrm {
         fusion: &str,
         epsilon: f64,
         rounds: usize,
+        composition: &str,
     ) -> PyResult<Bound<'py, PyDict>> {
         let fusion: pqrm::reason::Fusion = fusion.parse().map_err(perr)?;
+        let composition: pqrm::reason::Composition = composition.parse().map_err(perr)?;
         let options = pqrm::reason::InferOptions {
             fusion,
+            composition,
             epsilon,
             rounds,
         };
@@ -412,24 +415,46 @@ fn scan_dict<'py>(py: Python<'py>, s: &pqrm::Scan) -> PyResult<Bound<'py, PyDict
     Ok(d)
 }
 
-/// Reads an observation file: `format` is "csv", "mrclam" (a directory), "g2o" or "mcap" (a
-/// ROS 2 bag or Foxglove/qrm log; `topic` is one topic or a list, default: every detection
-/// topic, else the one LaserScan topic). Returns (scans, truth): each scan a dict
-/// {"t", "robot", "ids", "xy", "cov"} of NumPy arrays, truth a dict {landmark: (x, y)} or None.
+/// Reads an observation file as `qrm map` reads it: `format` is "csv", "mrclam" (a
+/// directory), "g2o" or "mcap" (a ROS 2 bag or Foxglove/qrm log; `topic` is one topic or a
+/// list, default: every detection topic, else the one LaserScan topic). MRCLAM's range-bearing
+/// noise is fitted from the recording unless `sigma_range`/`sigma_bearing` are given or
+/// `noise="fixed"` (MRCLAM's 0.15 m / 0.01 rad where one is missing); gross outliers are
+/// gated (3σ of the fit) where the noise was fitted, unless `gate=False` (`gate=True` gates
+/// any form). Returns (scans, truth): each scan a dict {"t", "robot", "ids", "xy", "cov"} of
+/// NumPy arrays, truth a dict {landmark: (x, y)} or None. A fit nobody asked for that cannot
+/// be made (a recording too short) keeps the fixed noise and warns.
 #[pyfunction]
-// Literal defaults (pyo3 renders them in the signature); they equal RangeBearingNoise::MRCLAM.
-#[pyo3(signature = (path, format, *, sigma_range = 0.15, sigma_bearing = 0.01, topic = None, range_max = None, allow_truncated = false))]
+#[pyo3(signature = (path, format, *, sigma_range = None, sigma_bearing = None, noise = None, gate = None, topic = None, range_max = None, allow_truncated = false))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn read_observations<'py>(
     py: Python<'py>,
     path: PathBuf,
     format: &str,
-    sigma_range: f64,
-    sigma_bearing: f64,
+    sigma_range: Option<f64>,
+    sigma_bearing: Option<f64>,
+    noise: Option<&str>,
+    gate: Option<bool>,
     topic: Option<Bound<'py, PyAny>>,
     range_max: Option<f32>,
     allow_truncated: bool,
 ) -> PyResult<(Vec<Bound<'py, PyDict>>, Option<TruthDict>)> {
+    use studies::recording::{NoiseMode, NoiseRequest, RecordingFormat};
+    let mode = match noise {
+        None => None,
+        Some("auto") => Some(NoiseMode::Auto),
+        Some("fixed") => Some(NoiseMode::Fixed),
+        Some(other) => {
+            return Err(invalid(format!(
+                "noise must be \"auto\" or \"fixed\", got {other:?}"
+            )));
+        }
+    };
+    let request = NoiseRequest {
+        mode,
+        sigma_range,
+        sigma_bearing,
+    };
     let topics: Vec<String> = match &topic {
         None => Vec::new(),
         Some(t) => match t.extract::<String>() {
@@ -450,27 +475,55 @@ pub(crate) fn read_observations<'py>(
         allow_truncated,
         ..Default::default()
     };
-    let data = crate::pool::detach(py, || match format {
-        "csv" => Ok(pqrm::loaders::read_csv(&path).map_err(perr)),
-        "mrclam" => Ok(pqrm::loaders::read_mrclam(
-            &path,
-            RangeBearingNoise {
-                sigma_range,
-                sigma_bearing,
-            },
-        )
-        .map_err(perr)),
-        "g2o" => Ok(pqrm::loaders::read_g2o(&path).map_err(perr)),
-        "mcap" => Ok(qrm_log::read_mcap(&path, &options)
-            .map(|r| r.dataset)
-            .map_err(crate::errors::log)),
-        other => Err(other.to_owned()),
-    })
-    .map_err(|f| {
-        invalid(format!(
-            "format must be csv, mrclam, g2o or mcap, got {f:?}"
-        ))
-    })??;
+    let recording = match format {
+        "csv" => Some(RecordingFormat::Csv),
+        "mrclam" => Some(RecordingFormat::Mrclam),
+        "g2o" => Some(RecordingFormat::G2o),
+        "mcap" => None,
+        other => {
+            return Err(invalid(format!(
+                "format must be csv, mrclam, g2o or mcap, got {other:?}"
+            )));
+        }
+    };
+    if recording.is_none() && (mode.is_some() || sigma_range.is_some() || sigma_bearing.is_some()) {
+        return Err(invalid(
+            "noise, sigma_range and sigma_bearing are for a range-bearing recording \
+             (format=\"mrclam\"); an MCAP log carries its own covariances",
+        ));
+    }
+    let (data, warnings) = crate::pool::detach(py, || {
+        let warnings = std::sync::Mutex::new(Vec::new());
+        let warn = |w: String| warnings.lock().map(|mut v| v.push(w)).unwrap_or(());
+        let (mut data, fit) = match recording {
+            Some(form) => {
+                let resolved = request
+                    .resolve(form, &path, &warn)
+                    .map_err(crate::errors::study_err)?;
+                let data = studies::recording::read(form, &path, resolved.noise)
+                    .map_err(crate::errors::study_err)?;
+                (data, resolved.fit)
+            }
+            None => (
+                qrm_log::read_mcap(&path, &options)
+                    .map(|r| r.dataset)
+                    .map_err(crate::errors::log)?,
+                None,
+            ),
+        };
+        studies::mapping::gate(&mut data, gate, fit.as_ref()).map_err(crate::errors::study_err)?;
+        let warnings = warnings.into_inner().unwrap_or_default();
+        Ok::<_, PyErr>((data, warnings))
+    })?;
+    for w in warnings {
+        let msg = std::ffi::CString::new(w).map_err(|e| invalid(e.to_string()))?;
+        PyErr::warn(
+            py,
+            &py.get_type::<pyo3::exceptions::PyUserWarning>(),
+            &msg,
+            1,
+        )?;
+    }
     let scans = data
         .scans
         .iter()

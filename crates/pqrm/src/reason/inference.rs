@@ -61,11 +61,60 @@ impl std::str::FromStr for Fusion {
     }
 }
 
+/// How a composition entry `r ∘ s` shares a path's probability among its states.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Composition {
+    /// Every state of the entry equally (maximum entropy: the table says which states are
+    /// possible, not how often).
+    Uniform,
+    /// As often as the map's own observed sets say: for each quadruple whose three sets
+    /// the map observed, the beliefs of `{x,y:c}`, `{y,c:z}` and `{x,y:z}` add
+    /// `p(r)·p(s)·p(t)` to `(r, s, t)`; each entry's weights are those counts with one
+    /// pseudo-count spread over the entry's states (so an entry the map never shows stays
+    /// uniform). No ground truth is used. On MRCLAM the uniform split left the inference's
+    /// low-confidence predictions underconfident (`docs/reasoning.md`).
+    #[default]
+    Learned,
+}
+
+impl Composition {
+    /// Both, in declaration order.
+    pub const ALL: [Composition; 2] = [Self::Uniform, Self::Learned];
+
+    /// The kebab-case name.
+    #[must_use]
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Uniform => "uniform",
+            Self::Learned => "learned",
+        }
+    }
+}
+
+impl std::str::FromStr for Composition {
+    type Err = PqrmError;
+
+    fn from_str(s: &str) -> Result<Self> {
+        Self::ALL
+            .into_iter()
+            .find(|c| c.name() == s)
+            .ok_or_else(|| {
+                PqrmError::InvalidConfig(format!(
+                    "unknown composition `{s}` (expected uniform or learned)"
+                ))
+            })
+    }
+}
+
 /// Settings of an [`Inferrer`].
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct InferOptions {
     /// How paths are combined.
     pub fusion: Fusion,
+    /// How a composition entry shares a path's probability among its states.
+    #[serde(default)]
+    pub composition: Composition,
     /// Weight of the uniform distribution mixed into each path before fusing (0 ≤ ε < 1).
     pub epsilon: f64,
     /// Rounds of [`Inferrer::infer_unseen`]: round 1 uses observed beliefs only, round r
@@ -77,6 +126,7 @@ impl Default for InferOptions {
     fn default() -> Self {
         Self {
             fusion: Fusion::default(),
+            composition: Composition::default(),
             epsilon: 0.01,
             rounds: 3,
         }
@@ -145,6 +195,8 @@ pub struct Inferrer<'m> {
     algebra: Algebra,
     /// `comp[r][s]`: the states of `r ∘ s`, as a list.
     comp: Vec<Vec<Vec<StateId>>>,
+    /// `share[r][s][i]`: the share of `comp[r][s][i]` in the entry (sums to 1).
+    share: Vec<Vec<Vec<f64>>>,
     /// `perm[op][t]`.
     perm: Vec<Vec<Vec<StateId>>>,
     options: InferOptions,
@@ -161,8 +213,15 @@ pub struct Inferrer<'m> {
 /// The grid α is fitted on.
 const ALPHA_GRID: [f64; 11] = [0.0, 0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9, 1.0];
 
-/// At most this many observed sets are used to fit α (spread evenly over the map).
+/// At most this many observed sets are used to fit α and learn the shares (spread evenly
+/// over the map).
 const FIT_SETS: usize = 400;
+
+/// The pseudo-count [`Composition::Learned`] spreads evenly over an entry's states. Chosen
+/// by leaving one MRCLAM recording out (0.1, 1, 10, 100; hidden-set log loss of the reason
+/// study, EDC + double-cross, the other two recordings): folds chose 0.1, 1, 1; 100 was
+/// worst on every recording (`docs/reasoning.md`).
+const SHARE_PSEUDO_COUNT: f64 = 1.0;
 
 impl<'m> Inferrer<'m> {
     /// Prepares inference over `map` with the calculus's general-position tables (a noisy
@@ -191,13 +250,14 @@ impl<'m> Inferrer<'m> {
             )));
         }
         let id = |i: usize| StateId(i as u16);
-        let comp = (0..q)
+        let comp: Vec<Vec<Vec<StateId>>> = (0..q)
             .map(|r| {
                 (0..q)
                     .map(|s| algebra.compose(id(r), id(s)).iter().collect())
                     .collect()
             })
             .collect();
+        let share = uniform_shares(&comp);
         let perm = Permutation::ALL
             .iter()
             .map(|op| {
@@ -210,6 +270,7 @@ impl<'m> Inferrer<'m> {
             map,
             algebra,
             comp,
+            share,
             perm,
             options,
             alpha: 1.0,
@@ -218,6 +279,9 @@ impl<'m> Inferrer<'m> {
             reached: BTreeMap::new(),
             rounds_ran: false,
         };
+        if options.composition == Composition::Learned {
+            me.share = me.learn_shares();
+        }
         if options.fusion == Fusion::Fitted {
             me.alpha = me.fit_alpha();
         }
@@ -282,9 +346,8 @@ impl<'m> Inferrer<'m> {
                         if w < 1e-15 || targets.is_empty() {
                             continue;
                         }
-                        let share = w / targets.len() as f64;
-                        for t in targets {
-                            pred[t.index()] += share;
+                        for (t, share) in targets.iter().zip(&self.share[r][s]) {
+                            pred[t.index()] += w * share;
                         }
                     }
                 }
@@ -484,15 +547,74 @@ impl<'m> Inferrer<'m> {
         self.inferred.get(&set).map(Vec::as_slice)
     }
 
+    /// The observed sets the shares and α are fitted on: at most [`FIT_SETS`], spread
+    /// evenly over the map.
+    fn fit_sets(&self) -> Vec<LandmarkSet> {
+        let sets = observed_sets(self.map);
+        let stride = sets.len().div_ceil(FIT_SETS).max(1);
+        sets.into_iter().step_by(stride).collect()
+    }
+
+    /// [`Composition::Learned`]'s shares: for each fitted set `(x,y,z)` (every ordering) and
+    /// fourth landmark `c` with `{x,y:c}` and `{y,c:z}` observed, `p(r)·p(s)·p(t)` added to
+    /// `(r, s, t)` for each state `t` of `r ∘ s`, then one pseudo-count per entry spread
+    /// evenly over its states. The target is the set's own belief, so no ground truth.
+    fn learn_shares(&self) -> Vec<Vec<Vec<f64>>> {
+        let q = self.algebra.n_states();
+        let mut counts: Vec<Vec<Vec<f64>>> = self
+            .comp
+            .iter()
+            .map(|row| row.iter().map(|ts| vec![0.0; ts.len()]).collect())
+            .collect();
+        for set in self.fit_sets() {
+            let [a, b, d] = set.ids();
+            for o in orderings(set) {
+                let [x, y, z] = o.ids();
+                let Some(target) = self.map.belief(o) else {
+                    continue;
+                };
+                for &c in &self.landmarks {
+                    if c == a || c == b || c == d {
+                        continue;
+                    }
+                    let (Some(p1), Some(p2)) = (
+                        self.map.belief(LandmarkSet::new(x, y, c)),
+                        self.map.belief(LandmarkSet::new(y, c, z)),
+                    ) else {
+                        continue;
+                    };
+                    for (r, pr) in p1.iter().enumerate().filter(|(_, p)| **p >= 1e-12) {
+                        for (s, ps) in p2.iter().enumerate() {
+                            let w = pr * ps;
+                            if w < 1e-15 {
+                                continue;
+                            }
+                            for (t, n) in self.comp[r][s].iter().zip(&mut counts[r][s]) {
+                                *n += w * target[t.index()];
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        debug_assert_eq!(counts.len(), q);
+        for entry in counts.iter_mut().flatten() {
+            let k = entry.len() as f64;
+            let total: f64 = entry.iter().sum::<f64>() + SHARE_PSEUDO_COUNT;
+            entry
+                .iter_mut()
+                .for_each(|n| *n = (*n + SHARE_PSEUDO_COUNT / k) / total);
+        }
+        counts
+    }
+
     /// α minimising the mean cross-entropy between each observed set's belief and its
     /// prediction from the other sets (leave-one-out: a set's own paths never use it).
     fn fit_alpha(&self) -> f64 {
-        let sets = observed_sets(self.map);
-        let stride = sets.len().div_ceil(FIT_SETS).max(1);
         let q = self.algebra.n_states();
-        let samples: Vec<(Vec<Vec<f64>>, Vec<f64>)> = sets
+        let samples: Vec<(Vec<Vec<f64>>, Vec<f64>)> = self
+            .fit_sets()
             .iter()
-            .step_by(stride)
             .filter_map(|s| {
                 let target = self.map.belief(canonical(*s))?;
                 let (paths, _) = self.paths(canonical(*s));
@@ -521,6 +643,17 @@ impl<'m> Inferrer<'m> {
             .min_by(|a, b| loss(*a).total_cmp(&loss(*b)))
             .unwrap_or(1.0)
     }
+}
+
+/// Every state of each composition entry an equal share.
+fn uniform_shares(comp: &[Vec<Vec<StateId>>]) -> Vec<Vec<Vec<f64>>> {
+    comp.iter()
+        .map(|row| {
+            row.iter()
+                .map(|ts| vec![1.0 / ts.len().max(1) as f64; ts.len()])
+                .collect()
+        })
+        .collect()
 }
 
 fn fuse_mixture(paths: &[Vec<f64>], q: usize, eps: f64) -> Vec<f64> {

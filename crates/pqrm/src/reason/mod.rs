@@ -7,15 +7,19 @@
 //! with both `{x,y:c}` and `{y,c:z}` in the map gives a *path*:
 //!
 //! ```text
-//! p_path(t) = Σ_r Σ_s  p(x,y:c = r) · p(y,c:z = s) · [t ∈ r ∘ s] / |r ∘ s|
+//! p_path(t) = Σ_r Σ_s  p(x,y:c = r) · p(y,c:z = s) · [t ∈ r ∘ s] · w(t | r, s)
 //! ```
 //!
 //! mapped back to `(a,b,d)` through the permutation that relates the orderings. Two
 //! assumptions, stated because they matter:
 //! 1. the two beliefs of a path are independent (they come from different sets of frames
 //!    only in part — frames that saw a, b, c, d together feed both);
-//! 2. within a composition entry every state is equally likely (maximum entropy: the table
-//!    says which states are possible, not how often).
+//! 2. the share `w(t | r, s)` of each state of a composition entry: by default
+//!    ([`Composition::Learned`]) as often as the map's own observed quadruples show it (one
+//!    pseudo-count spread evenly, so an entry never seen is uniform); or
+//!    [`Composition::Uniform`], `1/|r ∘ s|` (maximum entropy: the table says which states are
+//!    possible, not how often). On MRCLAM the uniform split left low-confidence inferences
+//!    underconfident and cost log loss on every recording (`docs/reasoning.md`).
 //!
 //! Paths are then fused ([`Fusion`]): a *mixture* (linear pool), a *product* (independent
 //! evidence: sharp, overconfident when paths share frames), the *tempered product*
@@ -44,6 +48,6 @@ pub mod network;
 pub mod report;
 
 pub use check::{FlaggedEntry, MapCheck, check};
-pub use inference::{Fusion, InferOptions, Inference, Inferrer, infer};
+pub use inference::{Composition, Fusion, InferOptions, Inference, Inferrer, infer};
 pub use network::{Selection, landmarks, observed_sets, to_network};
 pub use report::{InferenceReport, InferredSet};

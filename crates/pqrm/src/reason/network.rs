@@ -39,7 +39,8 @@ pub(crate) fn canonical(s: LandmarkSet) -> LandmarkSet {
     LandmarkSet::new(ids[0], ids[1], ids[2])
 }
 
-pub(crate) fn orderings(s: LandmarkSet) -> [LandmarkSet; 6] {
+/// The six orderings of a set, `(a,b,c)` first.
+pub fn orderings(s: LandmarkSet) -> [LandmarkSet; 6] {
     let [a, b, c] = s.ids();
     qsr_core::all_orderings(a, b, c).map(|(x, y, z)| LandmarkSet::new(x, y, z))
 }

@@ -237,6 +237,7 @@ class Pqrm:
         fusion: str = "fitted",
         epsilon: float = 0.01,
         rounds: int = 1,
+        composition: str = "learned",
     ) -> Inference: ...
     def check(self) -> ConsistencyCheck: ...
     def __len__(self) -> int: ...
@@ -245,8 +246,10 @@ def read_observations(
     path: str,
     format: str,
     *,
-    sigma_range: float = 0.15,
-    sigma_bearing: float = 0.01,
+    sigma_range: Optional[float] = None,
+    sigma_bearing: Optional[float] = None,
+    noise: Optional[str] = None,
+    gate: Optional[bool] = None,
     topic: Optional[Union[str, List[str]]] = None,
     range_max: Optional[float] = None,
     allow_truncated: bool = False,

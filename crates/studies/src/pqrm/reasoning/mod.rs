@@ -8,13 +8,13 @@
 
 use std::path::PathBuf;
 
-use pqrm::loaders::{Dataset, RangeBearingNoise};
+use pqrm::loaders::Dataset;
 use pqrm::reason_study::{ReasonCalculusResult, ReasonStudyConfig, run_reason_study};
 use qsr_core::progress::Progress;
 use serde::{Deserialize, Serialize};
 
 use crate::error::{Result, StudyError};
-use crate::recording::RecordingFormat;
+use crate::recording::{NoiseRequest, RecordingFormat};
 use crate::report::Report;
 use crate::study::Study;
 
@@ -34,6 +34,14 @@ pub struct ReasonConfig {
     /// Use only the first N frames with three or more landmarks (`None`: all).
     #[serde(default)]
     pub max_frames: Option<usize>,
+    /// The range-bearing noise (MRCLAM): fitted from the recording unless given, as `qrm
+    /// map` reads it (issue 35: the study reasons over the maps users get).
+    #[serde(default)]
+    pub noise: NoiseRequest,
+    /// Drop gross outliers frame by frame; `None`: where the noise is fitted, as `qrm map`
+    /// does ([`crate::mapping::gate`]).
+    #[serde(default)]
+    pub gate: Option<bool>,
     /// The study's settings: calculi, hidings, inference, the simulated world of (b).
     pub study: ReasonStudyConfig,
 }
@@ -48,6 +56,8 @@ impl ReasonConfig {
             format: RecordingFormat::Mrclam,
             truth: None,
             max_frames: None,
+            noise: NoiseRequest::default(),
+            gate: None,
             study,
         }
     }
@@ -75,14 +85,21 @@ pub struct ReasonOutput {
 #[derive(Debug, Clone, Copy)]
 pub struct ReasonStudy;
 
-/// The recording as every shard maps it: frames of three landmarks or more, the first
-/// `max_frames` of them, with surveyed truth.
+/// The recording as every shard maps it — read as `qrm map` reads it (the noise fitted
+/// where it can be, gross outliers gated where it was), then frames of three landmarks or
+/// more, the first `max_frames` of them, with surveyed truth.
 ///
 /// # Errors
-/// The loaders' (file, line, field); [`StudyError::InvalidParameter`] without truth or
-/// without a frame of three landmarks.
+/// The loaders' (file, line, field); the noise fit's when asked for; [`StudyError::InvalidParameter`]
+/// without truth or without a frame of three landmarks.
 pub fn read_recording(config: &ReasonConfig) -> Result<Dataset> {
-    let mut data = crate::recording::read(config.format, &config.input, RangeBearingNoise::MRCLAM)?;
+    // A fit that cannot be made (a short recording) keeps MRCLAM's noise, silently here:
+    // every shard reads alike, and the report states the noise it ran with.
+    let noise = config
+        .noise
+        .resolve(config.format, &config.input, &|_| ())?;
+    let mut data = crate::recording::read(config.format, &config.input, noise.noise)?;
+    crate::mapping::gate(&mut data, config.gate, noise.fit.as_ref())?;
     if let Some(t) = &config.truth {
         data.truth = Some(pqrm::loaders::read_truth_csv(t)?);
     }
@@ -135,6 +152,7 @@ impl Study for ReasonStudy {
     }
     fn check(config: &ReasonConfig) -> Result<()> {
         config.study.validate()?;
+        config.noise.validate()?;
         if config.max_frames == Some(0) {
             return Err(StudyError::InvalidParameter(
                 "max_frames must be >= 1 (or left out: all frames)".into(),

@@ -25,8 +25,9 @@ pub fn report(config: &ReasonConfig, output: &ReasonOutput) -> Report {
     Report {
         title: format!("Reasoning over maps — {}", config.input.display()),
         setup: format!(
-            "{}\n\n{}",
+            "{} {}\n\n{}",
             crate::pqrm::real_data::recordings::evidence_sentence(config.study.evidence),
+            reading_sentence(config),
             setup(output, best)
         ),
         tables: vec![scores_table(&output.results), check_table(&output.results)],
@@ -46,6 +47,33 @@ pub fn report(config: &ReasonConfig, output: &ReasonOutput) -> Report {
         notes: NOTES.to_owned(),
         attachments: vec![reason_json(config, output, best)],
     }
+}
+
+/// How the recording was read and how paths share a composition entry, from the config.
+fn reading_sentence(config: &ReasonConfig) -> String {
+    let fitted = config.format == crate::recording::RecordingFormat::Mrclam
+        && config.noise.sigma_range.is_none()
+        && config.noise.sigma_bearing.is_none()
+        && config.noise.mode != Some(crate::recording::NoiseMode::Fixed);
+    let noise = if fitted {
+        "its range-bearing noise fitted from the recording"
+    } else {
+        "the noise given (or the recording's own covariances)"
+    };
+    let gated = if config.gate.unwrap_or(fitted) {
+        "gross outliers gated (3σ)"
+    } else {
+        "every detection kept"
+    };
+    format!(
+        "The recording is read as `qrm map` reads it: {noise}, {gated}. Composition entries \
+         share a path's probability {}.",
+        match config.study.composition {
+            pqrm::reason::Composition::Learned =>
+                "as often as the map's own observed quadruples show each state (`learned`)",
+            pqrm::reason::Composition::Uniform => "evenly among their states (`uniform`)",
+        }
+    )
 }
 
 fn setup(output: &ReasonOutput, best: Fusion) -> String {
