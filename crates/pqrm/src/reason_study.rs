@@ -48,7 +48,7 @@ pub struct ReasonStudyConfig {
     /// How the maps read a set's frames (`crate::evidence`): the shared-error model, as
     /// `qrm map` reads a recording (issue 35: the study reasons over the maps users get).
     /// With learned composition shares it is the better of the two on every MRCLAM recording
-    /// (hidden-set EDC ECE, Datasets 2 / 5 / 7: 0.041 / 0.028 / 0.070 against eq. 2.10's
+    /// (hidden-set EDC ECE, Datasets 2 / 5 / 7: 0.041 / 0.023 / 0.070 against eq. 2.10's
     /// 0.050 / 0.063 / 0.177; `docs/reasoning.md`). Until 2026-11-29 eq. 2.10: with uniform
     /// shares the softer beliefs spread paths over their entries and the shared model lost.
     #[serde(default = "EvidenceModel::shared_default")]

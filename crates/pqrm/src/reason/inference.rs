@@ -25,7 +25,10 @@ pub enum Fusion {
     /// The log-linear pool with weights `k^(−α)`, α ∈ [0, 1] fitted on the map itself (between
     /// the product, α = 0, and the tempered product, α = 1): each observed set is predicted
     /// from the others and α minimises the cross-entropy against the map's own belief — no
-    /// ground truth is used.
+    /// ground truth is used. With [`Composition::Learned`] the same fit also chooses whether
+    /// the pool divides the base rate out of each path and counts it once (see
+    /// `fuse_log_linear`): k paths of learned shares each carry the targets' base rate, and a
+    /// product counts it k times.
     #[default]
     Fitted,
 }
@@ -197,6 +200,9 @@ pub struct Inferrer<'m> {
     comp: Vec<Vec<Vec<StateId>>>,
     /// `share[r][s][i]`: the share of `comp[r][s][i]` in the entry (sums to 1).
     share: Vec<Vec<Vec<f64>>>,
+    /// The base rate every learned path carries (`None`: uniform shares carry none): the
+    /// pool divides it out of each path and puts it back once.
+    base: Option<Vec<f64>>,
     /// `perm[op][t]`.
     perm: Vec<Vec<Vec<StateId>>>,
     options: InferOptions,
@@ -271,6 +277,7 @@ impl<'m> Inferrer<'m> {
             algebra,
             comp,
             share,
+            base: None,
             perm,
             options,
             alpha: 1.0,
@@ -280,10 +287,16 @@ impl<'m> Inferrer<'m> {
             rounds_ran: false,
         };
         if options.composition == Composition::Learned {
-            me.share = me.learn_shares();
+            let (share, base) = me.learn_shares();
+            me.share = share;
+            me.base = Some(base);
         }
         if options.fusion == Fusion::Fitted {
-            me.alpha = me.fit_alpha();
+            let (alpha, keep_base) = me.fit_alpha();
+            me.alpha = alpha;
+            if !keep_base {
+                me.base = None;
+            }
         }
         Ok(me)
     }
@@ -388,7 +401,7 @@ impl<'m> Inferrer<'m> {
             Fusion::Tempered => 1.0 / k,
             Fusion::Fitted => k.powf(-self.alpha),
         };
-        fuse_log_linear(paths, q, self.options.epsilon, weight)
+        fuse_log_linear(paths, q, self.options.epsilon, weight, self.base.as_deref())
     }
 
     /// Predicts `{a,b:d}` from the beliefs (observed, and inferred by earlier calls of
@@ -559,7 +572,11 @@ impl<'m> Inferrer<'m> {
     /// fourth landmark `c` with `{x,y:c}` and `{y,c:z}` observed, `p(r)·p(s)·p(t)` added to
     /// `(r, s, t)` for each state `t` of `r ∘ s`, then one pseudo-count per entry spread
     /// evenly over its states. The target is the set's own belief, so no ground truth.
-    fn learn_shares(&self) -> Vec<Vec<Vec<f64>>> {
+    /// Also returns the base rate of the targets (the counts summed over entries, one
+    /// pseudo-count spread over the states, smoothed with ε as a path is): what a path of
+    /// learned shares predicts when its two beliefs say nothing, so that a pool of k paths
+    /// counts it once and not k times.
+    fn learn_shares(&self) -> (Vec<Vec<Vec<f64>>>, Vec<f64>) {
         let q = self.algebra.n_states();
         let mut counts: Vec<Vec<Vec<f64>>> = self
             .comp
@@ -598,6 +615,18 @@ impl<'m> Inferrer<'m> {
             }
         }
         debug_assert_eq!(counts.len(), q);
+        let mut base = vec![SHARE_PSEUDO_COUNT / q as f64; q];
+        for (r, row) in counts.iter().enumerate() {
+            for (s, entry) in row.iter().enumerate() {
+                for (t, n) in self.comp[r][s].iter().zip(entry) {
+                    base[t.index()] += n;
+                }
+            }
+        }
+        let total: f64 = base.iter().sum();
+        let eps = self.options.epsilon;
+        base.iter_mut()
+            .for_each(|b| *b = (1.0 - eps) * *b / total + eps / q as f64);
         for entry in counts.iter_mut().flatten() {
             let k = entry.len() as f64;
             let total: f64 = entry.iter().sum::<f64>() + SHARE_PSEUDO_COUNT;
@@ -605,12 +634,12 @@ impl<'m> Inferrer<'m> {
                 .iter_mut()
                 .for_each(|n| *n = (*n + SHARE_PSEUDO_COUNT / k) / total);
         }
-        counts
+        (counts, base)
     }
 
     /// α minimising the mean cross-entropy between each observed set's belief and its
     /// prediction from the other sets (leave-one-out: a set's own paths never use it).
-    fn fit_alpha(&self) -> f64 {
+    fn fit_alpha(&self) -> (f64, bool) {
         let q = self.algebra.n_states();
         let samples: Vec<(Vec<Vec<f64>>, Vec<f64>)> = self
             .fit_sets()
@@ -622,14 +651,14 @@ impl<'m> Inferrer<'m> {
             })
             .collect();
         if samples.is_empty() {
-            return 1.0;
+            return (1.0, self.base.is_some());
         }
-        let loss = |alpha: f64| -> f64 {
+        let loss = |alpha: f64, base: Option<&[f64]>| -> f64 {
             samples
                 .iter()
                 .map(|(paths, target)| {
                     let w = (paths.len() as f64).powf(-alpha);
-                    let p = fuse_log_linear(paths, q, self.options.epsilon, w);
+                    let p = fuse_log_linear(paths, q, self.options.epsilon, w, base);
                     target
                         .iter()
                         .zip(&p)
@@ -638,10 +667,16 @@ impl<'m> Inferrer<'m> {
                 })
                 .sum::<f64>()
         };
+        let bases: Vec<Option<&[f64]>> = match self.base.as_deref() {
+            Some(b) => vec![None, Some(b)],
+            None => vec![None],
+        };
         ALPHA_GRID
             .into_iter()
-            .min_by(|a, b| loss(*a).total_cmp(&loss(*b)))
-            .unwrap_or(1.0)
+            .flat_map(|a| bases.iter().map(move |b| (a, *b)))
+            .map(|(a, b)| (loss(a, b), a, b.is_some()))
+            .min_by(|x, y| x.0.total_cmp(&y.0))
+            .map_or((1.0, false), |(_, a, b)| (a, b))
     }
 }
 
@@ -674,19 +709,31 @@ fn fuse_mixture(paths: &[Vec<f64>], q: usize, eps: f64) -> Vec<f64> {
 }
 
 /// `p ∝ Π_i p_i^weight`, each path smoothed with ε first; uniform without paths or when
-/// nothing survives.
-fn fuse_log_linear(paths: &[Vec<f64>], q: usize, eps: f64, weight: f64) -> Vec<f64> {
+/// nothing survives. With a `base` rate every path carries (learned shares), each path is
+/// read relative to it and it is put back once: `p ∝ b · Π_i (p_i / b)^weight`.
+fn fuse_log_linear(
+    paths: &[Vec<f64>],
+    q: usize,
+    eps: f64,
+    weight: f64,
+    base: Option<&[f64]>,
+) -> Vec<f64> {
     let uniform = 1.0 / q as f64;
     if paths.is_empty() {
         return vec![uniform; q];
     }
+    let k = paths.len() as f64;
     let logs: Vec<f64> = (0..q)
         .map(|t| {
-            paths
+            let pooled = paths
                 .iter()
                 .map(|p| ((1.0 - eps) * p[t] + eps * uniform).ln())
                 .sum::<f64>()
-                * weight
+                * weight;
+            match base {
+                Some(b) => pooled + (1.0 - k * weight) * b[t].ln(),
+                None => pooled,
+            }
         })
         .collect();
     let max = logs.iter().copied().fold(f64::NEG_INFINITY, f64::max);
@@ -706,4 +753,32 @@ fn fuse_log_linear(paths: &[Vec<f64>], q: usize, eps: f64, weight: f64) -> Vec<f
 /// As [`Inferrer::new`] and [`Inferrer::infer`].
 pub fn infer(map: &Pqrm, set: LandmarkSet) -> Result<Inference> {
     Inferrer::new(map, InferOptions::default())?.infer(set)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A pool of k paths that each say only the base rate says the base rate, whatever the
+    /// pool's weight; without the correction the product counts it k times.
+    #[test]
+    fn a_base_rate_every_path_carries_is_counted_once() {
+        let base = [0.6, 0.3, 0.1];
+        let paths = vec![base.to_vec(); 4];
+        for weight in [1.0, 0.5, 0.25] {
+            let p = fuse_log_linear(&paths, 3, 0.0, weight, Some(&base));
+            for (a, b) in p.iter().zip(base) {
+                assert!((a - b).abs() < 1e-12, "weight {weight}: {p:?}");
+            }
+        }
+        let p = fuse_log_linear(&paths, 3, 0.0, 1.0, None);
+        assert!(p[0] > 0.9, "the product of four copies sharpens: {p:?}");
+        // one informative path among base-rate ones decides alone, at weight 1
+        let mut mixed = vec![base.to_vec(); 3];
+        mixed.push(vec![0.2, 0.3, 0.5]);
+        let p = fuse_log_linear(&mixed, 3, 0.0, 1.0, Some(&base));
+        for (a, b) in p.iter().zip([0.2, 0.3, 0.5]) {
+            assert!((a - b).abs() < 1e-12, "{p:?}");
+        }
+    }
 }

@@ -26,7 +26,9 @@
 //! (log-linear pool with weights 1/k: never more confident than the average path), or the
 //! log-linear pool with weights `k^(−α)` where α is *fitted on the map itself* — every
 //! observed set is predicted from the others and α minimises the cross-entropy against the
-//! map's own belief, so no ground truth is needed (the default). Each path is smoothed with
+//! map's own belief, so no ground truth is needed (the default). With learned shares every
+//! path carries the targets' base rate; the same fit chooses whether the pool divides it out
+//! of each path and counts it once (`p ∝ b · Π (p_i / b)^w`) or not. Each path is smoothed with
 //! weight ε towards uniform first, so a state one path rules out can still win when the other
 //! paths insist. `qrm reason study` measures all four (`docs/reasoning.md`).
 //!
