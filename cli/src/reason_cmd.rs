@@ -549,7 +549,7 @@ fn infer(args: &InferArgs) -> Result<()> {
     } else {
         inferrer.infer_sets(&args.sets)?
     };
-    let report = InferenceReport::new(map.calculus(), &options, inferrer.alpha(), &inferences);
+    let report = InferenceReport::new(map.calculus(), &inferrer, &inferences);
     write_atomic(&args.out, serde_json::to_string_pretty(&report)?.as_bytes())?;
     outln!(
         "inferred {} sets of `{}` ({} more informative than uniform); wrote {}",

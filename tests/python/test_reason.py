@@ -65,8 +65,10 @@ def test_infer_predicts_a_set_never_seen_together():
     with pytest.raises(ValueError):
         m.infer((1, 2, 8), fusion="averaging")
     # the composition shares: learned (default) and uniform both distributions; a typo refused
-    u = m.infer((1, 2, 8), rounds=3, composition="uniform")["p"]
-    assert abs(u.sum() - 1.0) < 1e-9
+    u = m.infer((1, 2, 8), rounds=3, composition="uniform")
+    assert abs(u["p"].sum() - 1.0) < 1e-9
+    assert u["composition"] == "uniform" and u["base_rate"] is False
+    assert r["composition"] == "learned" and isinstance(r["base_rate"], bool)
     with pytest.raises(ValueError, match="composition"):
         m.infer((1, 2, 8), composition="even")
 

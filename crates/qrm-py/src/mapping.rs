@@ -160,7 +160,7 @@ impl Pqrm {
 
     /// A distribution for the ordered set (a, b, d) from the map's other beliefs through the
     /// compose table (see `pqrm::reason`): {"p": array, "paths": int, "via": [ids], "round":
-    /// int, "alpha": float}. A set the map observed is predicted from the observed beliefs; a
+    /// int, "alpha": float, "composition": str, "base_rate": bool}. A set the map observed is predicted from the observed beliefs; a
     /// set never observed is inferred as in the run over every unseen set (`rounds` of
     /// chained composition), so the two agree. `composition`: "learned" (each composition
     /// entry's states shared as the map's own quadruples show them) or "uniform".
@@ -183,11 +183,15 @@ impl Pqrm {
             rounds,
         };
         let map = &self.inner;
-        let (inf, alpha) = crate::pool::detach(py, || {
+        let (inf, alpha, base_rate) = crate::pool::detach(py, || {
             let mut inferrer = pqrm::reason::Inferrer::new(map, options)?;
             // as the run over every unseen set infers it (`Inferrer::infer_sets`)
             let mut inf = inferrer.infer_sets(&[LandmarkSet::new(set.0, set.1, set.2)])?;
-            Ok::<_, pqrm::PqrmError>((inf.remove(0), inferrer.alpha()))
+            Ok::<_, pqrm::PqrmError>((
+                inf.remove(0),
+                inferrer.alpha(),
+                inferrer.divides_base_rate(),
+            ))
         })
         .map_err(perr)?;
         let d = PyDict::new(py);
@@ -196,6 +200,8 @@ impl Pqrm {
         d.set_item("via", inf.via)?;
         d.set_item("round", inf.round)?;
         d.set_item("alpha", alpha)?;
+        d.set_item("composition", composition.name())?;
+        d.set_item("base_rate", base_rate)?;
         Ok(d)
     }
 

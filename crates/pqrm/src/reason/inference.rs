@@ -307,6 +307,20 @@ impl<'m> Inferrer<'m> {
         self.alpha
     }
 
+    /// Whether the pool divides the base rate out of each path and counts it once: with
+    /// [`Composition::Learned`], as the fit chose for [`Fusion::Fitted`], always for the other
+    /// log-linear pools; never with uniform shares.
+    #[must_use]
+    pub fn divides_base_rate(&self) -> bool {
+        self.base.is_some()
+    }
+
+    /// The options it was made with.
+    #[must_use]
+    pub fn options(&self) -> &InferOptions {
+        &self.options
+    }
+
     /// The tables in use.
     #[must_use]
     pub fn algebra(&self) -> &Algebra {

@@ -7,7 +7,7 @@ use qsr_core::Calculus;
 use serde::Serialize;
 
 use crate::reason::check::MapCheck;
-use crate::reason::inference::{InferOptions, Inference};
+use crate::reason::inference::{Inference, Inferrer};
 
 /// An inference below uniform entropy by more than this (nats) is "more informative than
 /// uniform": a distribution the paths moved.
@@ -38,8 +38,13 @@ pub struct InferredSet {
 pub struct InferenceReport {
     /// The fitted pooling weight α.
     pub alpha: f64,
+    /// Whether the pool divided the base rate out of each path and counted it once
+    /// ([`Inferrer::divides_base_rate`](crate::reason::Inferrer::divides_base_rate)).
+    pub base_rate: bool,
     /// The calculus's name.
     pub calculus: String,
+    /// How composition entries shared a path's probability (`learned` or `uniform`).
+    pub composition: &'static str,
     /// ε.
     pub epsilon: f64,
     /// The fusion rule's name.
@@ -53,14 +58,10 @@ pub struct InferenceReport {
 }
 
 impl InferenceReport {
-    /// The report of `inferences` made over a map of `calculus` with `options` and α.
+    /// The report of `inferences` made over a map of `calculus` by `inferrer`.
     #[must_use]
-    pub fn new(
-        calculus: &Calculus,
-        options: &InferOptions,
-        alpha: f64,
-        inferences: &[Inference],
-    ) -> Self {
+    pub fn new(calculus: &Calculus, inferrer: &Inferrer<'_>, inferences: &[Inference]) -> Self {
+        let options = inferrer.options();
         let inferences = inferences
             .iter()
             .map(|inf| InferredSet {
@@ -74,8 +75,10 @@ impl InferenceReport {
             })
             .collect();
         Self {
-            alpha,
+            alpha: inferrer.alpha(),
+            base_rate: inferrer.divides_base_rate(),
             calculus: calculus.name().to_owned(),
+            composition: options.composition.name(),
             epsilon: options.epsilon,
             fusion: options.fusion.name(),
             inferences,
@@ -181,7 +184,9 @@ mod tests {
     fn report(inferences: Vec<InferredSet>) -> InferenceReport {
         InferenceReport {
             alpha: 0.5,
+            base_rate: false,
             calculus: "left-right".into(),
+            composition: "uniform",
             epsilon: 0.01,
             fusion: "fitted",
             inferences,

@@ -134,6 +134,10 @@ class Inference(TypedDict):
     """the inference round that gave it (1: from observed sets only)"""
     alpha: float
     """the fusion's weight"""
+    composition: str
+    """how composition entries shared a path's probability ("learned" or "uniform")"""
+    base_rate: bool
+    """whether the pool divided the base rate out of each path and counted it once"""
 
 
 class FlaggedEntry(TypedDict):
