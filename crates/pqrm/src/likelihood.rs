@@ -430,9 +430,10 @@ struct Scratch {
     hist: Vec<[u32; 4]>,
     /// Whether `hist` may hold counts (a triplet stopped by an error before folding them).
     hist_dirty: bool,
-    /// One chunk of samples in the base frame (`x`, `y`, `n`) and their keys: kept here, not
+    /// One chunk of samples in the scaled base frame (`x·d`, `y·d`, `n·d`, `d`; see
+    /// [`ScaledFrame`]) and their keys: kept here, not
     /// zeroed on the stack for every triplet.
-    frame: Vec<[[f64; CHUNK]; 3]>,
+    frame: Vec<[[f64; CHUNK]; 4]>,
     keys: Vec<[u64; CHUNK]>,
     /// Per-ordering histograms of the generic path, four lanes per state.
     lanes: Vec<[u32; 4]>,
@@ -461,34 +462,59 @@ impl Apart {
     }
 }
 
-/// One sample of a triplet in its base frame, `(x, y, n, m)` as in [`base_sample`], and
-/// `|AB|²`.
-#[inline(always)]
-fn base_frame(a: [f64; 2], b: [f64; 2], c: [f64; 2]) -> ([f64; 4], f64) {
-    let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
-    let len2 = dx * dx + dy * dy;
-    let (vx, vy) = (c[0] - a[0], c[1] - a[1]);
-    let inv = 1.0 / len2;
-    let x = -(dx * vy - dy * vx) * inv;
-    let y = (dx * vx + dy * vy) * inv;
-    let n = x * x + y * y;
-    let m = x * x + (y - 1.0) * (y - 1.0);
-    ([x, y, n, m], len2)
+/// One sample of a triplet in its base frame scaled by `d = |AB|²`: `x·d`, `y·d`,
+/// `n·d = |AC|²`, `d`, and `|BC|²` — no division.
+///
+/// A quantity `u − t` of [`SixForms`] has the sign of `u·d − t·d` and a general one
+/// `A·n + B·x + C·y + D` the sign of `A·(n·d) + B·(x·d) + C·(y·d) + D·d` (`d > 0`), so the keys
+/// are taken from these polynomials in the coordinates: a handful of roundings each, relative
+/// to the magnitude of their terms, where the normalised frame adds a division's. A sample's
+/// key can differ from the exact one only within ~10⁻¹⁵ (relative) of a boundary;
+/// `tests::keys_agree_with_exact_arithmetic` checks it against exact rational arithmetic.
+#[derive(Debug, Clone, Copy)]
+struct ScaledFrame {
+    x: f64,
+    y: f64,
+    n: f64,
+    d: f64,
+    bc: f64,
+}
+
+impl ScaledFrame {
+    #[inline(always)]
+    fn of(a: [f64; 2], b: [f64; 2], c: [f64; 2]) -> Self {
+        let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
+        let (vx, vy) = (c[0] - a[0], c[1] - a[1]);
+        let (wx, wy) = (c[0] - b[0], c[1] - b[1]);
+        Self {
+            x: dy * vx - dx * vy,
+            y: dx * vx + dy * vy,
+            n: vx * vx + vy * vy,
+            d: dx * dx + dy * dy,
+            bc: wx * wx + wy * wy,
+        }
+    }
 }
 
 /// One sample of a triplet in its base normalised frame: `(x, y, n = x² + y²,
-/// m = x² + (y − 1)²)`, whether A and B are distinct, and whether C is distinct from both
-/// (relative to their magnitude; `|AC|² = n·|AB|²`, `|BC|² = m·|AB|²`). Shared by both
-/// counting paths so they normalise identically.
+/// m = x² + (y − 1)²)` (the general classifier's input), whether A and B are distinct, and
+/// whether C is distinct from both (relative to their magnitude; the squared distances of
+/// [`ScaledFrame`], so that every path checks coincidence on the same numbers).
 #[inline(always)]
 fn base_sample(a: [f64; 2], b: [f64; 2], c: [f64; 2], tol2: f64) -> ([f64; 4], bool, bool) {
-    let ([x, y, n, m], len2) = base_frame(a, b, c);
+    let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
+    let (vx, vy) = (c[0] - a[0], c[1] - a[1]);
+    let inv = 1.0 / (dx * dx + dy * dy);
+    let x = -(dx * vy - dy * vx) * inv;
+    let y = (dx * vx + dy * vy) * inv;
+    let xynm = [x, y, x * x + y * y, x * x + (y - 1.0) * (y - 1.0)];
+    let scaled = ScaledFrame::of(a, b, c);
     let a2 = a[0] * a[0] + a[1] * a[1];
     let b2 = b[0] * b[0] + b[1] * b[1];
     let c2 = c[0] * c[0] + c[1] * c[1];
-    let ab = len2 > tol2 * (1.0 + a2 + b2);
-    let c_apart = (n * len2 > tol2 * (1.0 + a2 + c2)) & (m * len2 > tol2 * (1.0 + b2 + c2));
-    ([x, y, n, m], ab, c_apart)
+    let ab = scaled.d > tol2 * (1.0 + a2 + b2);
+    let c_apart = (scaled.n > tol2 * (1.0 + a2 + c2)) & (scaled.bc > tol2 * (1.0 + b2 + c2));
+    (xynm, ab, c_apart)
 }
 
 /// The exact coincidence checks of samples `range` (where the conservative bounds failed).
@@ -603,11 +629,26 @@ fn triplet_counts_portable(
     out: &mut [u32],
 ) -> Result<()> {
     if let Some(forms) = forms {
-        if forms.decided
-            && let Some(key) = decided_key(forms, spread, apart)
-        {
-            decided_counts(forms, calculus.n_states(), key, samples.samples(), out);
-            return Ok(());
+        if forms.decided {
+            match settle(forms, spread, apart) {
+                Settled::All(key) => {
+                    decided_counts(forms, calculus.n_states(), key, samples.samples(), out);
+                    return Ok(());
+                }
+                Settled::Partly(partial) if partial.free.len() <= MAX_FREE => {
+                    let at = (calculus, forms, samples, [i, j, k]);
+                    // the orderings and the open quantities as constants: each pair its loop
+                    return match (forms.orders == 6, partial.free.len()) {
+                        (true, 1) => partial_counts::<6, 1>(at, &partial, out),
+                        (true, 2) => partial_counts::<6, 2>(at, &partial, out),
+                        (true, _) => partial_counts::<6, 3>(at, &partial, out),
+                        (false, 1) => partial_counts::<1, 1>(at, &partial, out),
+                        (false, 2) => partial_counts::<1, 2>(at, &partial, out),
+                        (false, _) => partial_counts::<1, 3>(at, &partial, out),
+                    };
+                }
+                Settled::Partly(_) | Settled::Not => {}
+            }
         }
         // the number of orderings as a constant: the canonical kernel skips the checks and
         // the table columns of the other five
@@ -920,7 +961,7 @@ impl SixForms {
 /// the group sizes of [`Grouped`]: each sample's base frame stays in registers and every
 /// quantity's sign is taken there (bit `b`: quantity `b` > 0, bit `32 + b`: exactly zero),
 /// so the loop vectorises over samples with nothing stored between passes and nothing
-/// chosen per quantity at run time. The arithmetic is [`base_frame`]'s and [`fill_keys`]'s,
+/// chosen per quantity at run time. The arithmetic is [`ScaledFrame`]'s and [`fill_keys`]'s,
 /// operation for operation: the keys are the same bits. Returns whether every sample passed
 /// the conservative coincidence bounds.
 #[inline(always)]
@@ -970,23 +1011,26 @@ fn fused_keys<
     );
     let mut valid = true;
     for u in 0..len {
-        let ([x, y, n, mm], len2) = base_frame([ax[u], ay[u]], [bx[u], by[u]], [cx[u], cy[u]]);
+        let ScaledFrame { x, y, n, d, bc } =
+            ScaledFrame::of([ax[u], ay[u]], [bx[u], by[u]], [cx[u], cy[u]]);
         // the canonical ordering alone needs only A ≠ B; the others use C as a reference
-        valid &=
-            (len2 > apart.ab) & (ORDERS == 1 || ((n * len2 > apart.ac) & (mm * len2 > apart.bc)));
+        valid &= (d > apart.ab) & (ORDERS == 1 || ((n > apart.ac) & (bc > apart.bc)));
         let mut k = 0u64;
         for i in 0..NN {
-            k |= (if n > tn[i] { gn[i] } else { 0 }) | (if n == tn[i] { zn[i] } else { 0 });
+            let t = tn[i] * d;
+            k |= (if n > t { gn[i] } else { 0 }) | (if n == t { zn[i] } else { 0 });
         }
         for i in 0..NX {
-            k |= (if x > tx[i] { gx[i] } else { 0 }) | (if x == tx[i] { zx[i] } else { 0 });
+            let t = tx[i] * d;
+            k |= (if x > t { gx[i] } else { 0 }) | (if x == t { zx[i] } else { 0 });
         }
         for i in 0..NY {
-            k |= (if y > ty[i] { gy[i] } else { 0 }) | (if y == ty[i] { zy[i] } else { 0 });
+            let t = ty[i] * d;
+            k |= (if y > t { gy[i] } else { 0 }) | (if y == t { zy[i] } else { 0 });
         }
         for i in 0..NG {
             let [fa, fb, fc, fd] = coef[i];
-            let v = fa * n + fb * x + fc * y + fd;
+            let v = fa * n + fb * x + fc * y + fd * d;
             k |= (if v > 0.0 { gg[i] } else { 0 }) | (if v == 0.0 { zg[i] } else { 0 });
         }
         key[u] = k;
@@ -1029,10 +1073,10 @@ fn fused_dispatch<const ORDERS: usize>(
     )
 }
 
-/// Each sample's key from its frame `(x, y, n)`: bit `b` says quantity `b` is positive,
-/// bit `32 + b` that it is exactly zero.
+/// Each sample's key from its scaled frame `(x·d, y·d, n·d, d)` ([`ScaledFrame`]): bit `b`
+/// says quantity `b` is positive, bit `32 + b` that it is exactly zero.
 #[inline(always)]
-fn fill_keys(forms: &SixForms, key: &mut [u64], x: &[f64], y: &[f64], n: &[f64]) {
+fn fill_keys(forms: &SixForms, key: &mut [u64], [x, y, n, d]: [&[f64]; 4]) {
     let vars = [n, x, y];
     for (b, quantity) in forms.quantities.iter().enumerate() {
         // masks selected by the comparisons (compare, and, or), not bits shifted into
@@ -1040,21 +1084,23 @@ fn fill_keys(forms: &SixForms, key: &mut [u64], x: &[f64], y: &[f64], n: &[f64])
         let (gt, zero) = (1u64 << b, 1u64 << (32 + b));
         match *quantity {
             Quantity::Single { var, t } => {
-                key.iter_mut().zip(vars[var]).for_each(|(kv, &u)| {
-                    *kv |= (if u > t { gt } else { 0 }) | (if u == t { zero } else { 0 });
-                });
+                key.iter_mut()
+                    .zip(vars[var])
+                    .zip(d)
+                    .for_each(|((kv, &u), &d)| {
+                        let t = t * d;
+                        *kv |= (if u > t { gt } else { 0 }) | (if u == t { zero } else { 0 });
+                    });
             }
             Quantity::General {
                 coef: [fa, fb, fc, fd],
             } => {
-                key.iter_mut()
-                    .zip(x)
-                    .zip(y)
-                    .zip(n)
-                    .for_each(|(((kv, &x), &y), &n)| {
-                        let v = fa * n + fb * x + fc * y + fd;
+                key.iter_mut().zip(x).zip(y).zip(n).zip(d).for_each(
+                    |((((kv, &x), &y), &n), &d)| {
+                        let v = fa * n + fb * x + fc * y + fd * d;
                         *kv |= (if v > 0.0 { gt } else { 0 }) | (if v == 0.0 { zero } else { 0 });
-                    });
+                    },
+                );
             }
         }
     }
@@ -1241,10 +1287,10 @@ fn six_counts<const ORDERS: usize>(
         (samples.columns(i), samples.columns(j), samples.columns(k));
     let s = samples.samples();
     if scratch.frame.is_empty() {
-        scratch.frame.push([[0.0; CHUNK]; 3]);
+        scratch.frame.push([[0.0; CHUNK]; 4]);
         scratch.keys.push([0; CHUNK]);
     }
-    let ([[xs, ys, ns], ..], [keys, ..]) =
+    let ([[xs, ys, ns, ds], ..], [keys, ..]) =
         (scratch.frame.as_mut_slice(), scratch.keys.as_mut_slice())
     else {
         return Err(PqrmError::InvalidConfig("six_counts: scratch".into()));
@@ -1276,21 +1322,22 @@ fn six_counts<const ORDERS: usize>(
         let mut valid = true;
         for t in 0..len {
             let u = start + t;
-            let ([x, y, n, mm], len2) = base_frame([ax[u], ay[u]], [bx[u], by[u]], [cx[u], cy[u]]);
+            let ScaledFrame { x, y, n, d, bc } =
+                ScaledFrame::of([ax[u], ay[u]], [bx[u], by[u]], [cx[u], cy[u]]);
             // the canonical ordering alone needs only A ≠ B; the others use C as a reference
-            valid &= (len2 > apart.ab)
-                & (ORDERS == 1 || ((n * len2 > apart.ac) & (mm * len2 > apart.bc)));
+            valid &= (d > apart.ab) & (ORDERS == 1 || ((n > apart.ac) & (bc > apart.bc)));
             xs[t] = x;
             ys[t] = y;
             ns[t] = n;
+            ds[t] = d;
         }
         if !valid {
             check_apart::<ORDERS>(samples, [i, j, k], start..start + len)?;
         }
-        let (x, y, n) = (&xs[..len], &ys[..len], &ns[..len]);
+        let frame = [&xs[..len], &ys[..len], &ns[..len], &ds[..len]];
         let key = &mut keys[..len];
         key.fill(0);
-        fill_keys(forms, key, x, y, n);
+        fill_keys(forms, key, frame);
         tally.chunk::<ORDERS>(forms, (table, q), key, &mut signs, out);
     }
     tally.finish::<ORDERS>(forms, q, out);
@@ -1298,23 +1345,163 @@ fn six_counts<const ORDERS: usize>(
     Ok(())
 }
 
-/// The one key every sample of a triplet has, when the discs its landmarks' samples span
-/// settle the sign of every quantity and keep the landmarks apart ([`crate::spread`]):
-/// counting the samples would put all of them under this key.
-fn decided_key(forms: &SixForms, spread: [&Option<Spread>; 3], apart: Apart) -> Option<usize> {
+/// What the discs a triplet's landmarks' samples span ([`crate::spread`]) settle.
+enum Settled {
+    /// Every quantity's sign and the coincidence checks: every sample has this key.
+    All(usize),
+    /// The coincidence checks and some quantities' signs.
+    Partly(Partial),
+    /// Not the coincidence checks.
+    Not,
+}
+
+/// Most unsettled quantities [`partial_counts`] takes (2³ sign combinations counted by
+/// bit masks); a triplet with more takes the full kernel.
+const MAX_FREE: usize = 3;
+
+/// A triplet whose discs settle the coincidence checks and some quantities: the key bits of
+/// the settled ones, and the others as forms `c₀·n + c₁·x + c₂·y + c₃·d` over the scaled
+/// frame ([`ScaledFrame`]) with their key bits.
+struct Partial {
+    key: usize,
+    free: Vec<(u32, [f64; 4])>,
+}
+
+/// The quantities' signs the discs settle (see [`Settled`]).
+fn settle(forms: &SixForms, spread: [&Option<Spread>; 3], apart: Apart) -> Settled {
     let [Some(a), Some(b), Some(c)] = spread else {
-        return None;
+        return Settled::Not;
     };
-    let bounds = FrameBounds::new([a, b, c], [apart.ab, apart.ac, apart.bc], forms.orders > 1)?;
+    let Some(bounds) =
+        FrameBounds::new([a, b, c], [apart.ab, apart.ac, apart.bc], forms.orders > 1)
+    else {
+        return Settled::Not;
+    };
     let mut key = 0usize;
+    let mut free = Vec::new();
     for (bit, quantity) in forms.quantities.iter().enumerate() {
-        let positive = match *quantity {
-            Quantity::Single { var, t } => bounds.single(var, t)?,
-            Quantity::General { coef } => bounds.general(coef)?,
+        let (positive, coef) = match *quantity {
+            Quantity::Single { var, t } => {
+                // u − t·d: the same sign as the fused loop's comparison of u with t·d
+                let mut coef = [0.0; 4];
+                coef[var] = 1.0;
+                coef[3] = -t;
+                (bounds.single(var, t), coef)
+            }
+            Quantity::General { coef } => (bounds.general(coef), coef),
         };
-        key |= usize::from(positive) << bit;
+        match positive {
+            Some(p) => key |= usize::from(p) << bit,
+            None => free.push((bit as u32, coef)),
+        }
     }
-    Some(key)
+    if free.is_empty() {
+        Settled::All(key)
+    } else {
+        Settled::Partly(Partial { key, free })
+    }
+}
+
+/// The counts of a triplet whose discs settle all but a few quantities (most of a map's
+/// triplets: of map_scaling.py's 10⁶ sets, 67 % leave one to three of the EDC's seven open
+/// where 19 % settle all). Only the open ones are evaluated per sample, and each of their
+/// 2¹–2³ sign combinations is counted by comparison in vector registers — no histogram, no
+/// coincidence checks (the discs settle them). A sample is classified as the full kernel classifies it: a settled
+/// quantity keeps its sign by a margin over the whole disc, an open one is the same
+/// floating-point form; a sample with an open quantity exactly zero takes the constraints'
+/// zero sides, one at a time.
+#[inline(always)]
+fn partial_counts<const ORDERS: usize, const FREE: usize>(
+    (calculus, forms, samples, [i, j, k]): (&Calculus, &SixForms, &ScanSamples, [usize; 3]),
+    partial: &Partial,
+    out: &mut [u32],
+) -> Result<()> {
+    let qsr_core::Partition::Constraints(partition) = calculus.partition() else {
+        return Err(PqrmError::InvalidConfig(
+            "partial_counts needs a constraint calculus".into(),
+        ));
+    };
+    let (table, q) = (partition.table(), calculus.n_states());
+    let ((ax, ay), (bx, by), (cx, cy)) =
+        (samples.columns(i), samples.columns(j), samples.columns(k));
+    let free = &partial.free;
+    let coef: [[f64; 4]; FREE] = std::array::from_fn(|f| free.get(f).map_or([0.0; 4], |q| q.1));
+    let mut combos = [0u32; 1 << MAX_FREE];
+    let mut signs = vec![0i8; forms.quantities.len()];
+    out.fill(0);
+    let s = samples.samples();
+    for start in (0..s).step_by(CHUNK) {
+        let len = CHUNK.min(s - start);
+        let coords = |u: usize| [[ax[u], ay[u]], [bx[u], by[u]], [cx[u], cy[u]]];
+        // each sample's combination of open signs (bit f: open quantity f > 0), or
+        // `ZERO` where one is exactly zero; counted by comparison, so the loop vectorises
+        const ZERO: u32 = 1 << MAX_FREE;
+        let combo_of = |u: usize| {
+            let [a, b, c] = coords(u);
+            let sf = ScaledFrame::of(a, b, c);
+            let (mut combo, mut zero) = (0u32, false);
+            for (f, [c0, c1, c2, c3]) in coef.iter().enumerate() {
+                let v = c0 * sf.n + c1 * sf.x + c2 * sf.y + c3 * sf.d;
+                combo |= u32::from(v > 0.0) << f;
+                zero |= v == 0.0;
+            }
+            if zero { ZERO } else { combo }
+        };
+        let mut chunk = [0u32; 1 << MAX_FREE];
+        let mut zeros = 0u32;
+        for u in start..start + len {
+            let combo = combo_of(u);
+            for (k, n) in chunk.iter_mut().enumerate().take(1 << FREE) {
+                *n += u32::from(combo == k as u32);
+            }
+            zeros += u32::from(combo == ZERO);
+        }
+        for (total, n) in combos.iter_mut().zip(chunk) {
+            *total += n;
+        }
+        if zeros == 0 {
+            continue;
+        }
+        // samples with an open quantity exactly zero: the constraints' zero sides decide
+        for u in start..start + len {
+            let [a, b, c] = coords(u);
+            let sf = ScaledFrame::of(a, b, c);
+            let values = coef.map(|[c0, c1, c2, c3]| c0 * sf.n + c1 * sf.x + c2 * sf.y + c3 * sf.d);
+            if values.iter().all(|v| *v != 0.0) {
+                continue;
+            }
+            for (bit, sg) in signs.iter_mut().enumerate() {
+                *sg = if partial.key >> bit & 1 == 1 { 1 } else { -1 };
+            }
+            for ((b, _), v) in free.iter().zip(values) {
+                signs[*b as usize] = if v > 0.0 {
+                    1
+                } else if v == 0.0 {
+                    0
+                } else {
+                    -1
+                };
+            }
+            for (o, c) in out.chunks_exact_mut(q).enumerate().take(ORDERS) {
+                c[usize::from(table[SixForms::bin(&forms.members[o], &signs)])] += 1;
+            }
+        }
+    }
+    for (combo, &count) in combos.iter().enumerate().take(1 << FREE) {
+        if count == 0 {
+            continue;
+        }
+        let key = free
+            .iter()
+            .enumerate()
+            .fold(partial.key, |key, (f, (bit, _))| {
+                key | (combo >> f & 1) << bit
+            });
+        for (o, c) in out.chunks_exact_mut(q).enumerate().take(ORDERS) {
+            c[usize::from(forms.states[key][o])] += count;
+        }
+    }
+    Ok(())
 }
 
 /// The counts of a triplet all of whose `s` samples have `key`: `s` in the key's state of
@@ -1363,6 +1550,9 @@ pub fn log_likelihood(counts: &[u32], floor: f64) -> Vec<f64> {
         .map(|&c| ((f64::from(c) + floor) / total).ln())
         .collect()
 }
+
+#[cfg(test)]
+mod exact_reference;
 
 #[cfg(test)]
 mod tests {
@@ -1622,7 +1812,9 @@ mod tests {
                 for k in j + 1..m {
                     let spread = [&spreads[i], &spreads[j], &spreads[k]];
                     let apart = super::Apart::new([0.0; 3]);
-                    settled += usize::from(super::decided_key(&forms, spread, apart).is_some());
+                    let all =
+                        matches!(super::settle(&forms, spread, apart), super::Settled::All(_));
+                    settled += usize::from(all);
                 }
             }
         }

@@ -497,7 +497,11 @@ fn the_closed_form_orderings_equal_direct_classification_in_every_calculus() {
 
 /// Zero noise on a lattice puts landmarks exactly on lines and circles of each other's
 /// frames: every quantity that is exactly zero must take its constraint's `zero` side. The
-/// reference evaluates every form of every ordering on its own (the table in `likelihood`).
+/// reference evaluates every form of every ordering on its own (the table in `likelihood`),
+/// in exact arithmetic: on an integer lattice the frame scaled by `D = |AB|²` (`X = x·D`,
+/// `Y = y·D`, `n·D = |AC|²`) has only exact products. (Regression, issue 37: with the
+/// normalised frame this reference, like the kernel before it, put C = (0, 2) in the frame
+/// (1, 0) → (2, 2) off the circle about A through B — x = −0.8 and y = 0.6 round, n ≠ 1.)
 #[test]
 fn boundary_configurations_take_each_constraints_zero_side() {
     let pts: Vec<(u32, [f64; 2])> = vec![
@@ -532,13 +536,13 @@ fn boundary_configurations_take_each_constraints_zero_side() {
         for group in pairs.chunks(6) {
             let [a, b, c] = group[0].0.0;
             let (pa, pb, pc) = (pos(a), pos(b), pos(c));
-            // the base frame exactly as the sampler computes it
+            // the base frame scaled by d = |AB|²: integers, exactly
             let (dx, dy) = (pb[0] - pa[0], pb[1] - pa[1]);
-            let inv = 1.0 / (dx * dx + dy * dy);
             let (vx, vy) = (pc[0] - pa[0], pc[1] - pa[1]);
-            let x = -(dx * vy - dy * vx) * inv;
-            let y = (dx * vx + dy * vy) * inv;
-            let n = x * x + y * y;
+            let d = dx * dx + dy * dy;
+            let x = -(dx * vy - dy * vx);
+            let y = dx * vx + dy * vy;
+            let n = vx * vx + vy * vy;
             for (o, (set, got)) in group.iter().enumerate() {
                 let mut bin = 0usize;
                 for (k, con) in spec.constraints.iter().enumerate() {
@@ -559,7 +563,7 @@ fn boundary_configurations_take_each_constraints_zero_side() {
                         [de, be, -ga - 2.0 * de, al + ga + de],
                         [al + ga + de, -be, -ga - 2.0 * de, de],
                     ][o];
-                    let v = fa * n + fb * x + fc * y + fd;
+                    let v = fa * n + fb * x + fc * y + fd * d;
                     if v == 0.0 {
                         on_boundary += 1;
                     }
