@@ -32,6 +32,11 @@ def test_a_pqrm_built_from_python_equals_one_built_by_rust(qrm_bin, tmp_path):
     assert json.loads(m.to_json()) == json.loads((out / "map.json").read_text())
     met = m.metrics({k: v for k, v in truth.items()})
     assert met["error_rate"] < 0.3 and len(met["top_n_error"]) == 20
+    # a CSV carries its covariances: asking to fit a range-bearing noise is refused in
+    # Python's words (regression: the message named the command line's --noise/--format)
+    with pytest.raises(qrm.InvalidInput, match=r'noise="auto" fits a range-bearing sensor') as e:
+        qrm.read_observations(str(obs), "csv", noise="auto")
+    assert "--" not in str(e.value) and "csv" in str(e.value)
 
 
 def test_update_belief_entropy_save_load(tmp_path):
@@ -75,8 +80,10 @@ def test_mrclam_is_read_as_qrm_map_reads_it(mrclam_dir):
     assert count(given) == count(plain)
     with pytest.raises(qrm.InvalidInput, match="noise"):
         qrm.read_observations(str(mrclam_dir), "mrclam", noise="guess")
-    with pytest.raises(qrm.InvalidInput, match="noise auto"):
+    # refused in the function's own words, not the command line's flags
+    with pytest.raises(qrm.InvalidInput, match=r'noise="auto" fits sigma_range') as e:
         qrm.read_observations(str(mrclam_dir), "mrclam", noise="auto", sigma_range=0.2)
+    assert "--" not in str(e.value)
 
 
 def test_single_observation_matches_phi():

@@ -641,10 +641,12 @@ fn triplet_counts_portable(
                     return match (forms.orders == 6, partial.free.len()) {
                         (true, 1) => partial_counts::<6, 1>(at, &partial, out),
                         (true, 2) => partial_counts::<6, 2>(at, &partial, out),
-                        (true, _) => partial_counts::<6, 3>(at, &partial, out),
+                        (true, 3) => partial_counts::<6, 3>(at, &partial, out),
+                        (true, _) => partial_counts::<6, 4>(at, &partial, out),
                         (false, 1) => partial_counts::<1, 1>(at, &partial, out),
                         (false, 2) => partial_counts::<1, 2>(at, &partial, out),
-                        (false, _) => partial_counts::<1, 3>(at, &partial, out),
+                        (false, 3) => partial_counts::<1, 3>(at, &partial, out),
+                        (false, _) => partial_counts::<1, 4>(at, &partial, out),
                     };
                 }
                 Settled::Partly(_) | Settled::Not => {}
@@ -1355,9 +1357,10 @@ enum Settled {
     Not,
 }
 
-/// Most unsettled quantities [`partial_counts`] takes (2³ sign combinations counted by
-/// bit masks); a triplet with more takes the full kernel.
-const MAX_FREE: usize = 3;
+/// Most unsettled quantities [`partial_counts`] takes (2⁴ sign combinations, each counted
+/// by comparison); a triplet with more takes the full kernel. Four rather than three: all
+/// orderings CPU ×0.97 on map_scaling.py's recording (median of 6 interleaved pairs).
+const MAX_FREE: usize = 4;
 
 /// A triplet whose discs settle the coincidence checks and some quantities: the key bits of
 /// the settled ones, and the others as forms `c₀·n + c₁·x + c₂·y + c₃·d` over the scaled
@@ -1404,8 +1407,8 @@ fn settle(forms: &SixForms, spread: [&Option<Spread>; 3], apart: Apart) -> Settl
 
 /// The counts of a triplet whose discs settle all but a few quantities (most of a map's
 /// triplets: of map_scaling.py's 10⁶ sets, 67 % leave one to three of the EDC's seven open
-/// where 19 % settle all). Only the open ones are evaluated per sample, and each of their
-/// 2¹–2³ sign combinations is counted by comparison in vector registers — no histogram, no
+/// where 19 % settle all; 4 % more leave four). Only the open ones are evaluated per
+/// sample, and each of their 2¹–2⁴ sign combinations is counted by comparison in vector registers — no histogram, no
 /// coincidence checks (the discs settle them). A sample is classified as the full kernel classifies it: a settled
 /// quantity keeps its sign by a margin over the whole disc, an open one is the same
 /// floating-point form; a sample with an open quantity exactly zero takes the constraints'

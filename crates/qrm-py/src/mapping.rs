@@ -498,6 +498,22 @@ pub(crate) fn read_observations<'py>(
              (format=\"mrclam\"); an MCAP log carries its own covariances",
         ));
     }
+    // the two refusals of `NoiseRequest::resolve`, in this function's words (its own name
+    // the command line's flags)
+    if mode == Some(NoiseMode::Auto) {
+        if recording != Some(RecordingFormat::Mrclam) {
+            return Err(invalid(format!(
+                "noise=\"auto\" fits a range-bearing sensor (format=\"mrclam\"); a {format} \
+                 recording carries its own covariances"
+            )));
+        }
+        if sigma_range.is_some() || sigma_bearing.is_some() {
+            return Err(invalid(
+                "noise=\"auto\" fits sigma_range and sigma_bearing: drop them, or say \
+                 noise=\"fixed\"",
+            ));
+        }
+    }
     let (data, warnings) = crate::pool::detach(py, || {
         let warnings = std::sync::Mutex::new(Vec::new());
         let warn = |w: String| warnings.lock().map(|mut v| v.push(w)).unwrap_or(());
