@@ -1,6 +1,7 @@
 //! Best-of-N timing of one PQRM step (10 landmarks, s = 1000, EDC, every ordering) on one
-//! thread (or the number given): the counting kernel alone (`step_counts`, draws included) and the whole update,
-//! interleaved, best wall time of each. Steadier than a mean on a loaded machine; used to
+//! thread (or the number given): the draws alone, the counting kernel (`step_counts`, draws
+//! included) and the whole update, interleaved, best wall time of each — what each part of a
+//! step costs, so what any kernel change can gain at most. Steadier than a mean on a loaded machine; used to
 //! compare kernel changes (the fair comparison with numba is
 //! `crates/qrm-py/benches/sampling_numpy.py`).
 //!
@@ -30,9 +31,12 @@ fn main() {
         .build()
         .unwrap();
     let mut map = pqrm::Pqrm::new(edc.clone(), pqrm::PqrmConfig::default()).unwrap();
-    let (mut step, mut update) = (f64::INFINITY, f64::INFINITY);
+    let (mut draw, mut step, mut update) = (f64::INFINITY, f64::INFINITY, f64::INFINITY);
     pool.install(|| {
         for r in 0..rounds {
+            let t = Instant::now();
+            std::hint::black_box(ScanSamples::draw(&scan, 1000, 7, r as u64));
+            draw = draw.min(t.elapsed().as_secs_f64());
             let t = Instant::now();
             let samples = ScanSamples::draw(&scan, 1000, 7, r as u64);
             std::hint::black_box(step_counts(&edc, &samples, Orderings::All).unwrap());
@@ -44,7 +48,8 @@ fn main() {
     });
     let per = 1e9 / 720_000.0;
     println!(
-        "best of {rounds}, {threads} thread(s): step_counts {:.3} ms ({:.2} ns per ordered triplet-sample), update {:.3} ms ({:.2} ns)",
+        "best of {rounds}, {threads} thread(s): draws {:.3} ms, step_counts {:.3} ms ({:.2} ns per ordered triplet-sample), update {:.3} ms ({:.2} ns)",
+        draw * 1e3,
         step * 1e3,
         step * per,
         update * 1e3,
