@@ -558,6 +558,11 @@ impl Pqrm {
     /// product is the posterior of all observations under the filter's uniform prior), sets
     /// in one map are copied.
     ///
+    /// The merged map reads its beliefs under *this* map's evidence model
+    /// ([`Pqrm::evidence`]); `other`'s is not consulted. Both store eq. 2.10's sums, so the
+    /// merged rows are the same whichever model either map was read under, and
+    /// [`Pqrm::with_evidence`] switches the reading afterwards.
+    ///
     /// # Errors
     /// [`PqrmError::Mismatch`] when the calculi differ.
     pub fn merge(&mut self, other: &Pqrm) -> Result<()> {

@@ -253,7 +253,9 @@ impl Pqrm {
         Ok(d)
     }
 
-    /// Folds another map of the same calculus into this one.
+    /// Folds another map of the same calculus into this one (the product of the two beliefs
+    /// of a set in both). The merged map keeps this map's evidence model; both store
+    /// eq. 2.10's sums, so the rows do not depend on either map's model.
     fn merge(&mut self, py: Python<'_>, other: &Pqrm) -> PyResult<()> {
         let inner = &mut self.inner;
         crate::pool::detach(py, || inner.merge(&other.inner)).map_err(perr)

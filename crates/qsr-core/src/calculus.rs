@@ -648,7 +648,22 @@ fn rows_fused(c: &ConstraintPartition, triplets: &[[f64; 6]], out: &mut [StateId
         let n = rows.len();
         // a full block as an array: every index provably in range, the loop has no tail
         let valid = match <&[[f64; 6]; BLOCK]>::try_from(rows) {
-            Ok(full) => c.classify_points(BLOCK, |i| normalise_row(&full[i]), &mut states),
+            Ok(full) => {
+                // moved into six columns first: the fused loop then loads each coordinate of
+                // eight (four) rows as one vector, where reading the rows in place gathered
+                // them one 48-byte stride at a time
+                let mut cols = [[0.0f64; BLOCK]; 6];
+                for (i, row) in full.iter().enumerate() {
+                    for (col, v) in cols.iter_mut().zip(row) {
+                        col[i] = *v;
+                    }
+                }
+                c.classify_points(
+                    BLOCK,
+                    |i| normalise_row(&std::array::from_fn(|k| cols[k][i])),
+                    &mut states,
+                )
+            }
             Err(_) => c.classify_points(n, |i| normalise_row(&rows[i]), &mut states[..n]),
         };
         if !valid {
