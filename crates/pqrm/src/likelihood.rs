@@ -470,7 +470,8 @@ impl Apart {
 /// are taken from these polynomials in the coordinates: a handful of roundings each, relative
 /// to the magnitude of their terms, where the normalised frame adds a division's. A sample's
 /// key can differ from the exact one only within ~10⁻¹⁵ (relative) of a boundary;
-/// `tests::keys_agree_with_exact_arithmetic` checks it against exact rational arithmetic.
+/// `exact_reference::keys_agree_with_exact_arithmetic` checks it against exact dyadic
+/// arithmetic.
 #[derive(Debug, Clone, Copy)]
 struct ScaledFrame {
     x: f64,
@@ -1408,11 +1409,11 @@ fn settle(forms: &SixForms, spread: [&Option<Spread>; 3], apart: Apart) -> Settl
 /// The counts of a triplet whose discs settle all but a few quantities (most of a map's
 /// triplets: of map_scaling.py's 10⁶ sets, 67 % leave one to three of the EDC's seven open
 /// where 19 % settle all; 4 % more leave four). Only the open ones are evaluated per
-/// sample, and each of their 2¹–2⁴ sign combinations is counted by comparison in vector registers — no histogram, no
-/// coincidence checks (the discs settle them). A sample is classified as the full kernel classifies it: a settled
-/// quantity keeps its sign by a margin over the whole disc, an open one is the same
-/// floating-point form; a sample with an open quantity exactly zero takes the constraints'
-/// zero sides, one at a time.
+/// sample, and each of their 2¹–2⁴ sign combinations is counted by comparison in vector
+/// registers — no histogram, no coincidence checks (the discs settle them). A sample is
+/// classified as the full kernel classifies it: a settled quantity keeps its sign by a
+/// margin over the whole disc, an open one is the same floating-point form; a sample with
+/// an open quantity exactly zero takes the constraints' zero sides, one at a time.
 #[inline(always)]
 fn partial_counts<const ORDERS: usize, const FREE: usize>(
     (calculus, forms, samples, [i, j, k]): (&Calculus, &SixForms, &ScanSamples, [usize; 3]),
