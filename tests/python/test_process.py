@@ -93,12 +93,14 @@ FORK_AFTER_LOAD = textwrap.dedent(
 )
 
 
-def _run_fork_script(tmp_path, name, text, what, *args):
+def _run_fork_script(tmp_path, name, text, what, *args, threads="2"):
     """Runs a fork script in its own interpreter (a hang is caught by the timeout, not by the
-    test runner hanging); it must print `fork-ok`."""
+    test runner hanging); it must print `fork-ok`. With `threads="1"` every call runs on its
+    caller's thread (`pool.rs`, `on_this_thread`), which a child forked from that thread
+    inherits."""
     script = tmp_path / name
     script.write_text(text)
-    env = dict(os.environ, RAYON_NUM_THREADS="2")
+    env = dict(os.environ, RAYON_NUM_THREADS=threads)
     try:
         done = subprocess.run(
             [sys.executable, str(script), *args], capture_output=True, text=True, timeout=120, env=env
@@ -110,13 +112,103 @@ def _run_fork_script(tmp_path, name, text, what, *args):
 
 
 @pytest.mark.skipif(sys.platform != "linux", reason="fork is the default start method on Linux only")
-def test_fork_pool_after_loading_maps_does_not_hang(tmp_path):
-    _run_fork_script(tmp_path, "fork_after_load.py", FORK_AFTER_LOAD, "loading a map", str(tmp_path))
+@pytest.mark.parametrize("threads", ["1", "2"])
+def test_fork_pool_after_loading_maps_does_not_hang(tmp_path, threads):
+    _run_fork_script(
+        tmp_path, "fork_after_load.py", FORK_AFTER_LOAD, "loading a map", str(tmp_path), threads=threads
+    )
 
 
 @pytest.mark.skipif(sys.platform != "linux", reason="fork is the default start method on Linux only")
-def test_fork_pool_after_a_qrm_call_does_not_hang(tmp_path):
-    _run_fork_script(tmp_path, "fork_after_call.py", FORK_AFTER_CALL, "a qrm call")
+@pytest.mark.parametrize("threads", ["1", "2"])
+def test_fork_pool_after_a_qrm_call_does_not_hang(tmp_path, threads):
+    _run_fork_script(tmp_path, "fork_after_call.py", FORK_AFTER_CALL, "a qrm call", threads=threads)
+
+
+# A call runs on its caller's thread as worker 0 of a pool of its own: with one worker thread
+# every Python thread has one (up to 64 threads; later ones hand off to the shared pool), with
+# more only the first. Many threads at once, more threads than that, and a progress callback
+# that calls qrm while a watched call runs: the same results as one thread calling in turn,
+# and no hang.
+THREADS = textwrap.dedent(
+    """
+    import os
+    import threading
+    import numpy as np
+    import qrm
+
+    edc = qrm.Calculus.builtin("edc")
+    XY = np.array([[0.0, 0.0], [0.0, 5.0], [-1.0, 2.0], [2.0, 1.0], [1.5, -2.0]])
+    COV = np.array([[0.3, 0.0, 0.3]] * 5)
+
+    def work(seed):
+        rng = np.random.default_rng(seed)
+        states = edc.classify(rng.normal(size=(5000, 6)))
+        m = qrm.Pqrm(edc, samples=300, orderings="all", seed=seed)
+        for t in range(3):
+            m.update(float(t), np.arange(5), XY, COV)
+        return int(states.sum()), m.to_json(), qrm.worker_threads()
+
+    want = [work(s) for s in range(10)]
+    assert all(w[2] == int(os.environ["RAYON_NUM_THREADS"]) for w in want)
+    got = {}
+    def run(i):
+        got[i] = work(i % 10)
+    for wave in range(10):  # 100 threads in all, 10 at a time
+        threads = [threading.Thread(target=run, args=(10 * wave + i,)) for i in range(10)]
+        [t.start() for t in threads]
+        [t.join(60) for t in threads]
+    assert sorted(got) == list(range(100)), sorted(got)
+    assert all(got[i] == want[i % 10] for i in got)
+
+    seen = []
+    def callback(done, total):
+        seen.append(int(edc.classify(np.array([[0.0, 0.0, 0.0, 1.0, 1.0, 0.5]]))[0]))
+    rng = np.random.default_rng(1)
+    beliefs = [{"samples": rng.normal(c, 0.15, size=(300, 2))} for c in ([-1.0, 0.5], [1.0, 0.5], [0.0, 2.5])]
+    learned = qrm.serge(beliefs, 3, sigma=0.0, trials=20, grid=24, window=(-2.0, 2.0, -1.0, 3.0), seed=2)
+    qrm.compose_cells(learned.to_calculus("toy"), progress=callback)
+    assert seen and len(set(seen)) == 1, seen
+    print("threads-ok", len(got))
+    """
+)
+
+
+@pytest.mark.parametrize("threads", ["1", "2"])
+def test_calls_from_many_threads(tmp_path, threads):
+    script = tmp_path / "threads.py"
+    script.write_text(THREADS)
+    try:
+        done = subprocess.run(
+            [sys.executable, str(script)], capture_output=True, text=True, timeout=300,
+            env=dict(os.environ, RAYON_NUM_THREADS=threads),
+        )
+    except subprocess.TimeoutExpired:
+        pytest.fail(f"calls from many Python threads with RAYON_NUM_THREADS={threads} hung (> 300 s)")
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.startswith("threads-ok 100"), done.stdout
+
+
+def test_calls_start_on_the_callers_thread():
+    """A call's work starts on the thread that called (no hand-off to a sleeping worker,
+    70-130 us a call on a 2-core VM): on every thread with one worker thread, on the first
+    thread that calls with more (the others hand off to the shared pool)."""
+    code = textwrap.dedent(
+        """
+        import threading, qrm
+        from qrm import _qrm
+        seen = [_qrm._on_caller_thread()]
+        t = threading.Thread(target=lambda: seen.append(_qrm._on_caller_thread()))
+        t.start(); t.join()
+        print(seen)
+        """
+    )
+    for n, want in [("1", "[True, True]"), ("2", "[True, False]")]:
+        out = subprocess.run(
+            [sys.executable, "-c", code], capture_output=True, text=True, timeout=60,
+            env=dict(os.environ, RAYON_NUM_THREADS=n),
+        )
+        assert out.stdout.strip() == want, (n, out.stdout, out.stderr)
 
 
 def test_worker_threads_follow_rayon_num_threads(tmp_path):

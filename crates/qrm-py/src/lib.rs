@@ -59,6 +59,7 @@ fn _qrm(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(navigation::qlink_study, m)?)?;
     m.add_function(wrap_pyfunction!(navigation::qlink_field, m)?)?;
     m.add_function(wrap_pyfunction!(pool::worker_threads, m)?)?;
+    m.add_function(wrap_pyfunction!(pool::_on_caller_thread, m)?)?;
     m.add_function(wrap_pyfunction!(reasoning::reason_close, m)?)?;
     m.add_function(wrap_pyfunction!(reasoning::reason_scenario, m)?)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;

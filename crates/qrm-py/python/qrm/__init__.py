@@ -12,7 +12,8 @@ region maps and learned calculi (`serge`, `SalientRegionMap`, `compose_cells`,
 
 Every error is a `QrmError`; the subclasses say what kind and are also the builtin a caller
 would catch (`InvalidInput` is a `ValueError`, `IoError` an `OSError`; see the stubs).
-The module is fork-safe: each process builds its own worker threads (`worker_threads()`).
+The module is fork-safe: each process builds its own worker threads (`worker_threads()`), and a
+call starts on the calling thread rather than waiting for a sleeping worker to wake.
 
 Long calls (`qlink_study`, `qlink_field`, `compose_cells`, `serge_cross_validate`,
 `monte_carlo_shard`) stop on Ctrl-C within a fraction of a second (raising

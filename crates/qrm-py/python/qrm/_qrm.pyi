@@ -45,6 +45,7 @@ __all__ = [
     "studies_aggregate",
     "studies_save",
     "worker_threads",
+    "_on_caller_thread",
     "reason_close",
     "reason_scenario",
     "reason_close_binary",
@@ -98,6 +99,9 @@ def reason_solve_binary(
 def reason_read_csp(calculus: Union[BinaryCalculus, BinaryAlgebra], text: str) -> str: ...
 def worker_threads() -> int:
     """Worker threads of this process's (fork-safe) thread pool."""
+def _on_caller_thread() -> bool:
+    """Whether a call's work starts on the calling thread (as worker 0 of a pool of its own)
+    rather than being handed to a worker (for tests and diagnostics)."""
 
 @final
 class Calculus:
