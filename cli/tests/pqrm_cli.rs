@@ -975,5 +975,16 @@ fn the_real_data_study_scores_every_recording_given() {
         "report"
     );
     assert!(report.contains("Every recording: log loss below the smoothed vote's"));
+    // what chance gives a calibrated map of the same triplets, per row and in a verdict
+    let header: Vec<&str> = csv.lines().next().unwrap().split(',').collect();
+    for col in ["chance_ece_95", "chance_gap_95", "chance_pass"] {
+        let at = header.iter().position(|h| *h == col).expect(col);
+        for line in csv.lines().skip(1) {
+            let v: f64 = line.split(',').nth(at).unwrap().parse().unwrap();
+            assert!((0.0..=1.0).contains(&v), "{col} = {v} in {line}");
+        }
+    }
+    assert!(report.contains("Every recording: ECE within what chance gives a calibrated map"));
+    assert!(report.contains("passes all 12 rows with probability"));
     std::fs::remove_dir_all(&out).ok();
 }

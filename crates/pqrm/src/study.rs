@@ -675,6 +675,10 @@ pub struct RealCalculusResult {
     pub majority: VoteMetrics,
     /// The map's reliability diagram.
     pub calibration: crate::calibration::Calibration,
+    /// What a calibrated map of the same triplets would score by chance (drawn with the
+    /// map's seed).
+    #[serde(default)]
+    pub chance: crate::calibration::Chance,
     /// The map's log loss against the truth: mean `−ln P(true state)` over scored triplets
     /// (a probability below 1e-300 counts as 1e-300, so the score stays finite).
     #[serde(default)]
@@ -885,6 +889,12 @@ fn real_result(
             mean_neighbor_distance: vdist as f64 / vnf,
         },
         calibration: crate::calibration::calibration(map, truth)?,
+        chance: crate::calibration::chance(
+            map,
+            truth,
+            crate::calibration::CHANCE_DRAWS,
+            map.config().seed,
+        )?,
         pqrm: evaluate(map, truth)?,
         entropies: map.iter().map(|(_, b)| b.entropy()).collect(),
         per_frame: frames.metrics(),

@@ -10,7 +10,7 @@
 //! ≥ 30 triplets within 0.10 of its accuracy).
 
 use pqrm::EvidenceModel;
-use pqrm::calibration::{CALIBRATED_ECE, CALIBRATED_GAP, CalibrationBin, MIN_BIN};
+use pqrm::calibration::{CALIBRATED_ECE, CALIBRATED_GAP, CalibrationBin, Chance, MIN_BIN};
 use pqrm::study::{RealCalculusResult, run_real_tempered};
 use pqrm::temper::{TemperChoice, TemperOptions, fit_temper};
 use qsr_core::Calculus;
@@ -49,6 +49,9 @@ pub struct RecordingRow {
     pub vote_log_loss: f64,
     /// The reliability diagram.
     pub bins: Vec<CalibrationBin>,
+    /// What a calibrated map of the same triplets scores by chance.
+    #[serde(default)]
+    pub chance: Chance,
 }
 
 impl RecordingRow {
@@ -66,6 +69,7 @@ impl RecordingRow {
             log_loss: r.log_loss,
             vote_log_loss: r.vote_log_loss,
             bins: r.calibration.bins.clone(),
+            chance: r.chance.clone(),
         }
     }
 
@@ -85,6 +89,13 @@ impl RecordingRow {
     #[must_use]
     pub fn calibrated(&self) -> bool {
         pqrm::calibration::is_calibrated(self.ece, self.max_gap)
+    }
+
+    /// ECE within what a calibrated map of the same triplets shows in 95 % of draws
+    /// ([`Chance`]; false where no band was drawn).
+    #[must_use]
+    pub fn ece_within_chance(&self) -> bool {
+        self.chance.draws > 0 && !self.chance.ece_beyond(self.ece)
     }
 }
 
@@ -193,6 +204,9 @@ pub fn table(rows: &[RecordingRow]) -> Table {
             Column::new("ece", "ECE"),
             Column::new("max_gap", &format!("largest gap (bins ≥ {MIN_BIN})")),
             Column::new("calibrated", "calibrated"),
+            Column::new("chance_ece_95", "a calibrated map's ECE, 95 %"),
+            Column::new("chance_gap_95", "its largest gap, 95 %"),
+            Column::new("chance_pass", "it passes"),
             Column::new("log_loss", "log loss"),
             Column::new("vote_log_loss", "smoothed vote log loss"),
             Column::new("loss_ok", "log loss < vote"),
@@ -201,7 +215,9 @@ pub fn table(rows: &[RecordingRow]) -> Table {
     .caption(format!(
         "Each recording read with the same settings (its own noise fit and gate). Calibrated: ECE ≤ {CALIBRATED_ECE} and every \
          P(ML) bin of ≥ {MIN_BIN} triplets within {CALIBRATED_GAP} of its accuracy. Smoothed vote: each triplet's histogram of single-frame \
-         ML states with one pseudo-count per state."
+         ML states with one pseudo-count per state. A calibrated map: the same triplets with their true states drawn from the \
+         map's own beliefs (one draw per unordered triplet for its six orderings; `pqrm::calibration::Chance`) — the 95th \
+         percentiles of its ECE and largest gap, and how often it passes the bar: what chance alone does at this many triplets."
     ));
     for r in rows {
         t.push(vec![
@@ -214,6 +230,9 @@ pub fn table(rows: &[RecordingRow]) -> Table {
             Cell::number(r.ece, 3),
             Cell::number(r.max_gap, 3),
             yes_no(r.calibrated()),
+            Cell::number(r.chance.ece[1], 3),
+            Cell::number(r.chance.max_gap[1], 3),
+            Cell::number(r.chance.pass_rate, 2),
             Cell::number(r.log_loss, 3),
             Cell::number(r.vote_log_loss, 3),
             yes_no(r.loss_ok()),
@@ -253,6 +272,9 @@ pub fn claims(rows: &[RecordingRow]) -> Vec<Claim> {
     let (c_ours, c_v) = judge(&RecordingRow::calibrated, &|r| {
         format!("{} ECE {:.3}, gap {:.3}", name(r), r.ece, r.max_gap)
     });
+    let (x_ours, x_v) = judge(&RecordingRow::ece_within_chance, &|r| {
+        format!("{} ECE {:.3} > {:.3}", name(r), r.ece, r.chance.ece[1])
+    });
     let thesis = "the thesis maps one recording and measures no calibration; ours: the bar of probabilities a robot can bet on";
     vec![
         Claim {
@@ -276,9 +298,37 @@ pub fn claims(rows: &[RecordingRow]) -> Vec<Claim> {
             thesis: thesis.into(),
             ours: c_ours,
             verdict: c_v,
-            why: String::new(),
+            why: chance_of_passing(rows),
+        },
+        Claim {
+            what: "Every recording: ECE within what chance gives a calibrated map of the same triplets (its 95th percentile)"
+                .into(),
+            thesis: thesis.into(),
+            ours: x_ours,
+            verdict: x_v,
+            why: "a miss beyond this is the map's, not the sample's; within it, the bar above cannot tell".into(),
         },
     ]
+}
+
+/// How often a map whose every belief is right would pass the calibration bar on all `rows`
+/// (the product of their chance pass rates, the rows' draws taken as independent), said in
+/// the calibration claim: at a few hundred triplets a row, chance alone fails it often.
+fn chance_of_passing(rows: &[RecordingRow]) -> String {
+    if rows.is_empty() || rows.iter().any(|r| r.chance.draws == 0) {
+        return String::new();
+    }
+    let all: f64 = rows.iter().map(|r| r.chance.pass_rate).product();
+    let least = rows
+        .iter()
+        .min_by(|a, b| a.chance.pass_rate.total_cmp(&b.chance.pass_rate))
+        .map(|r| format!("{} {} {:.2}", r.recording, r.calculus, r.chance.pass_rate))
+        .unwrap_or_default();
+    format!(
+        "a map whose every belief is right passes all {} rows with probability {all:.2} (each row's pass rate over the drawn \
+         truths; lowest: {least})",
+        rows.len()
+    )
 }
 
 /// A reliability diagram per recording: accuracy against mean P(ML) per bin, one line per
@@ -339,6 +389,12 @@ mod tests {
             log_loss: loss,
             vote_log_loss: vloss,
             bins: Vec::new(),
+            chance: Chance {
+                draws: 1000,
+                ece: [0.02, 0.06],
+                max_gap: [0.05, 0.15],
+                pass_rate: 0.7,
+            },
         }
     }
 
@@ -348,10 +404,13 @@ mod tests {
         let c = claims(&[good.clone(), good.clone()]);
         assert!(c.iter().all(|c| c.verdict == Verdict::Holds), "{c:?}");
         // one row past each bar fails that claim only
+        let mut lucky = good.clone();
+        lucky.chance.ece[1] = 0.0499; // a calibrated map of these triplets stays below 0.05
         for (i, bad) in [
             row(0.1051, 0.100, 0.05, 0.10, 0.5, 0.6),
             row(0.1, 0.1, 0.05, 0.10, 0.6, 0.6),
             row(0.1, 0.1, 0.0501, 0.10, 0.5, 0.6),
+            lucky,
         ]
         .into_iter()
         .enumerate()
@@ -369,5 +428,17 @@ mod tests {
         let gap = claims(&[row(0.1, 0.1, 0.01, 0.1001, 0.5, 0.6)]);
         assert_eq!(gap[2].verdict, Verdict::Violated);
         assert!(claims(&[]).iter().all(|c| c.verdict == Verdict::Violated));
+        // the calibration claim says how often a calibrated map passes every row
+        assert!(
+            claims(&[good.clone(), good.clone()])[2]
+                .why
+                .contains("all 2 rows with probability 0.49"),
+            "{:?}",
+            claims(&[good.clone(), good.clone()])[2]
+        );
+        // no band drawn: nothing to judge the ECE against
+        let mut undrawn = good.clone();
+        undrawn.chance = Chance::default();
+        assert_eq!(claims(&[undrawn])[3].verdict, Verdict::Violated);
     }
 }
