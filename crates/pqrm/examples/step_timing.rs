@@ -1,6 +1,7 @@
 //! Best-of-N timing of one PQRM step (10 landmarks, s = 1000, EDC, every ordering) on one
 //! thread (or the number given): the draws alone, the counting kernel (`step_counts`, draws
-//! included) and the whole update, interleaved, best wall time of each — what each part of a
+//! included), the filter alone (`apply_counts` of a step's counts) and the whole update,
+//! interleaved, best wall time of each — what each part of a
 //! step costs, so what any kernel change can gain at most. Steadier than a mean on a loaded machine; used to
 //! compare kernel changes (the fair comparison with numba is
 //! `crates/qrm-py/benches/sampling_numpy.py`).
@@ -31,7 +32,11 @@ fn main() {
         .build()
         .unwrap();
     let mut map = pqrm::Pqrm::new(edc.clone(), pqrm::PqrmConfig::default()).unwrap();
-    let (mut draw, mut step, mut update) = (f64::INFINITY, f64::INFINITY, f64::INFINITY);
+    let (mut draw, mut step, mut filter, mut update) =
+        (f64::INFINITY, f64::INFINITY, f64::INFINITY, f64::INFINITY);
+    let counts = pool.install(|| {
+        step_counts(&edc, &ScanSamples::draw(&scan, 1000, 7, 0), Orderings::All).unwrap()
+    });
     pool.install(|| {
         for r in 0..rounds {
             let t = Instant::now();
@@ -42,16 +47,20 @@ fn main() {
             std::hint::black_box(step_counts(&edc, &samples, Orderings::All).unwrap());
             step = step.min(t.elapsed().as_secs_f64());
             let t = Instant::now();
+            std::hint::black_box(map.apply_counts(&counts).unwrap());
+            filter = filter.min(t.elapsed().as_secs_f64());
+            let t = Instant::now();
             std::hint::black_box(map.update(&scan).unwrap());
             update = update.min(t.elapsed().as_secs_f64());
         }
     });
     let per = 1e9 / 720_000.0;
     println!(
-        "best of {rounds}, {threads} thread(s): draws {:.3} ms, step_counts {:.3} ms ({:.2} ns per ordered triplet-sample), update {:.3} ms ({:.2} ns)",
+        "best of {rounds}, {threads} thread(s): draws {:.3} ms, step_counts {:.3} ms ({:.2} ns per ordered triplet-sample), filter {:.3} ms, update {:.3} ms ({:.2} ns)",
         draw * 1e3,
         step * 1e3,
         step * per,
+        filter * 1e3,
         update * 1e3,
         update * per
     );

@@ -166,6 +166,6 @@ impl BeliefStore {
 
 /// A log-probability as stored: rounded to `f32` (below `f32::MIN` it is `-inf`: a
 /// probability under e^-3.4e38 is zero in either precision).
-fn to_stored(v: f64) -> f32 {
+pub(crate) fn to_stored(v: f64) -> f32 {
     v as f32
 }

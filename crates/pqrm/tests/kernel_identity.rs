@@ -1,13 +1,40 @@
 //! The PQRM step's counts are exact integers: a faster kernel must give the same ones, bit
 //! for bit, on every CPU and for any thread count. The fingerprints below were recorded from
-//! the kernel of session 10 (f331344) before it was reworked; a change to the sampler, the
-//! closed-form orderings or the sign keys that moves a single sample into another state
-//! changes them.
+//! the kernel of session 10 (f331344) before it was reworked; a change to the closed-form
+//! orderings or the sign keys that moves a single sample into another state changes them.
+//! The samples are drawn here the way the sampler drew them then (ChaCha8 per landmark), so
+//! the kernel stays pinned to those counts when the sampler's generator changes; the
+//! sampler's own stream is pinned separately (`draws_are_the_recorded_stream`).
 #![allow(clippy::unwrap_used)] // tests: a panic is the failure report
 
 use pqrm::likelihood::{Orderings, step_counts};
+use pqrm::sampler::mix;
 use pqrm::{LandmarkId, Observation, Scan, ScanSamples};
 use qsr_core::Calculus;
+use rand::SeedableRng;
+use rand_distr::{Distribution, StandardNormal};
+
+/// `s` samples per landmark as the sampler drew them until 2026-11-29: ChaCha8 seeded from
+/// `(seed, step, id)`, two standard normals per sample through the Cholesky factor.
+fn recorded_draw(scan: &Scan, s: usize, seed: u64, step: u64) -> ScanSamples {
+    let (mut xs, mut ys) = (Vec::new(), Vec::new());
+    for o in &scan.observations {
+        let mut rng =
+            rand_chacha::ChaCha8Rng::seed_from_u64(mix(seed ^ mix(step ^ mix(u64::from(o.id.0)))));
+        let [l11, l21, l22] = o.cholesky();
+        let (mut x, mut y) = (Vec::with_capacity(s), Vec::with_capacity(s));
+        for _ in 0..s {
+            let z1: f64 = StandardNormal.sample(&mut rng);
+            let z2: f64 = StandardNormal.sample(&mut rng);
+            x.push(o.mean[0] + l11 * z1);
+            y.push(o.mean[1] + l21 * z1 + l22 * z2);
+        }
+        xs.push(x);
+        ys.push(y);
+    }
+    let ids = scan.observations.iter().map(|o| o.id).collect();
+    ScanSamples::from_columns(ids, xs, ys).unwrap()
+}
 
 /// Twelve landmarks in general position (a fixed pseudo-random layout) plus three on a
 /// lattice so that some samples land near boundaries.
@@ -30,7 +57,7 @@ fn scan() -> Scan {
 
 /// FNV-1a over the sets' ids and counts, in the order `step_counts` returns them.
 fn fingerprint(calculus: &Calculus, orderings: Orderings, threads: usize) -> u64 {
-    let samples = ScanSamples::draw(&scan(), 1500, 11, 2);
+    let samples = recorded_draw(&scan(), 1500, 11, 2);
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(threads)
         .build()
@@ -78,6 +105,60 @@ fn step_counts_are_bit_identical_to_the_recorded_kernel() {
     }
     assert_eq!(got, expected);
 }
+
+/// FNV-1a over every sample's bits, landmark by landmark: the sampler's stream for a seed.
+fn draws_fingerprint(samples: &ScanSamples) -> u64 {
+    let mut h = 0xcbf2_9ce4_8422_2325u64;
+    for i in 0..samples.ids().len() {
+        let (x, y) = samples.columns(i);
+        for v in x.iter().chain(y) {
+            for b in v.to_bits().to_le_bytes() {
+                h ^= u64::from(b);
+                h = h.wrapping_mul(0x0100_0000_01b3);
+            }
+        }
+    }
+    h
+}
+
+/// Pins the sampler (seeded xoshiro256++ per landmark since 2026-11-29): a map's figures for
+/// a seed change only when this does. Independent of the thread count, and of which other
+/// landmarks a scan holds.
+#[test]
+fn draws_are_the_recorded_stream() {
+    let scan = scan();
+    let one = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .unwrap();
+    let two = rayon::ThreadPoolBuilder::new()
+        .num_threads(2)
+        .build()
+        .unwrap();
+    let a = one.install(|| ScanSamples::draw(&scan, 1500, 11, 2));
+    let b = two.install(|| ScanSamples::draw(&scan, 1500, 11, 2));
+    assert_eq!(draws_fingerprint(&a), draws_fingerprint(&b));
+    // one landmark alone draws what it drew among the others
+    let alone = Scan::new(0.0, 0, vec![scan.observations[4]]).unwrap();
+    let c = ScanSamples::draw(&alone, 1500, 11, 2);
+    assert_eq!(c.columns(0), a.columns(4));
+    // another step or seed is another stream
+    assert_ne!(
+        draws_fingerprint(&ScanSamples::draw(&scan, 1500, 11, 3)),
+        draws_fingerprint(&a)
+    );
+    assert_ne!(
+        draws_fingerprint(&ScanSamples::draw(&scan, 1500, 12, 2)),
+        draws_fingerprint(&a)
+    );
+    if std::env::var_os("QRM_BLESS").is_some() {
+        println!("draws {:#018x}", draws_fingerprint(&a));
+    }
+    assert_eq!(draws_fingerprint(&a), RECORDED_DRAWS);
+}
+
+/// [`draws_fingerprint`] of `ScanSamples::draw(&scan(), 1500, 11, 2)`.
+const RECORDED_DRAWS: u64 = 0x31a7_283f_d175_e286;
 
 const RECORDED: &str = "
 edc All 0xc88e847ee11c02a5
