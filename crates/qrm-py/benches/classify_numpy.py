@@ -13,7 +13,8 @@ Baselines, all checked to give qrm's labels on every triplet before any is timed
 qrm is timed through the wheel (`Calculus.classify` with `out=`, rows; `classify_columns`,
 six contiguous columns) in the same process as the baselines of its thread count: one process
 per thread count (its pools pinned by RAYON_NUM_THREADS / NUMBA_NUM_THREADS), interleaved
-rounds, best wall and best CPU time each (the way `sampling_numpy.py` times the PQRM step).
+rounds (each call after 50 ms of quiet), best wall and best CPU time each (the way
+`sampling_numpy.py` times the PQRM step).
 Every ratio is against the strongest baseline of the same layout and thread count.
 
 Usage (workspace root; a venv with numpy, numba and the qrm wheel):
@@ -34,6 +35,9 @@ from typing import Callable, Dict
 import numpy as np
 
 BLOCK = 1 << 16
+# Seconds of quiet before each timed call: numba's OpenMP workers spin for milliseconds after
+# a parallel loop and would take CPU from whichever implementation is timed next.
+SETTLE = 0.05
 
 
 def edc_naive(t: np.ndarray) -> np.ndarray:
@@ -202,6 +206,7 @@ def measure(threads: int, n: int, repeat: int) -> Dict[str, Dict[str, float]]:
         f()  # warm-up (numba's compile, qrm's pool)
     for _ in range(repeat):
         for name, f in jobs.items():
+            time.sleep(SETTLE)
             w0, c0 = time.perf_counter(), time.process_time()
             f()
             c1, w1 = time.process_time(), time.perf_counter()

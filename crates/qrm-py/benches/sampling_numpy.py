@@ -32,7 +32,8 @@ implementations of that count run in interleaved rounds (round r runs each once,
 and each keeps its best wall time and its best CPU time (`time.process_time`, every thread of
 the process) over --repeat rounds; a timing is a batch of calls lasting about 50 ms, divided
 by the number of calls (the CPU time of worker threads is only accounted at the scheduler's
-ticks, so one short call would miss it). The table gives both; every ratio is against the
+ticks, so one short call would miss it), after 50 ms of quiet (`SETTLE`: numba's OpenMP
+workers spin on after a parallel loop and would slow whatever is timed next). The table gives both; every ratio is against the
 **strongest baseline** of the same thread count (the fastest by wall time), named in the
 output. `numba-frames, drawn before` times the fair kernel on samples drawn outside the clock
 (what the kernel alone costs; not a baseline, since qrm's figure includes its draws).
@@ -56,6 +57,10 @@ import numpy as np
 
 M, S, SIGMA = 10, 1000, 10.0
 BATCH = 0.05  # seconds per timed batch of calls
+# Seconds of quiet before each timed batch: numba's OpenMP workers spin for milliseconds after
+# a parallel loop, and on two cores they took 7 % from whichever job was timed next (qrm's
+# step: 0.252 ms alone and after a pause, 0.271 ms right after numba-frames-parallel).
+SETTLE = 0.05
 TRIPLETS = np.array(list(itertools.permutations(range(M), 3)), dtype=np.int64)
 Q = 20
 
@@ -350,6 +355,7 @@ def measure(threads: int, repeat: int) -> Dict[str, Dict[str, float]]:
         inner[name] = max(1, int(BATCH / max(time.perf_counter() - w0, 1e-9)))
     for _ in range(repeat):
         for name, f in jobs.items():
+            time.sleep(SETTLE)
             w0, c0 = time.perf_counter(), time.process_time()
             for _ in range(inner[name]):
                 f()
