@@ -79,10 +79,15 @@ pub fn calibration(map: &Pqrm, truth: &GroundTruth) -> Result<Calibration> {
 /// The reliability diagram of scored beliefs: each one's P(ML) and whether its ML state is
 /// the true one.
 fn diagram(scored: impl IntoIterator<Item = (f64, bool)>) -> Calibration {
-    let k = EDGES.len() - 1;
+    diagram_with(&EDGES, scored)
+}
+
+/// [`diagram`] over the bins between `edges` (increasing, from 0 to 1).
+fn diagram_with(edges: &[f64], scored: impl IntoIterator<Item = (f64, bool)>) -> Calibration {
+    let k = edges.len().saturating_sub(1).max(1);
     let (mut n, mut conf, mut hits) = (vec![0usize; k], vec![0.0; k], vec![0usize; k]);
     for (p, hit) in scored {
-        let bin = bin_of(p);
+        let bin = bin_of(edges, p);
         n[bin] += 1;
         conf[bin] += p;
         hits[bin] += usize::from(hit);
@@ -94,8 +99,8 @@ fn diagram(scored: impl IntoIterator<Item = (f64, bool)>) -> Calibration {
             continue;
         }
         let bin = CalibrationBin {
-            lo: EDGES[b],
-            hi: EDGES[b + 1],
+            lo: edges[b],
+            hi: edges[b + 1],
             n: n[b],
             mean_p_ml: conf[b] / n[b] as f64,
             accuracy: hits[b] as f64 / n[b] as f64,
@@ -110,10 +115,13 @@ fn diagram(scored: impl IntoIterator<Item = (f64, bool)>) -> Calibration {
     out
 }
 
-/// The bin of a P(ML) ([`EDGES`]; the last bin includes 1).
-fn bin_of(p: f64) -> usize {
-    let k = EDGES.len() - 1;
-    EDGES[1..].iter().position(|&hi| p < hi).unwrap_or(k - 1)
+/// The bin of a P(ML) between `edges` (the last bin includes 1).
+fn bin_of(edges: &[f64], p: f64) -> usize {
+    let k = edges.len().saturating_sub(1).max(1);
+    edges
+        .get(1..)
+        .and_then(|upper| upper.iter().position(|&hi| p < hi))
+        .unwrap_or(k - 1)
 }
 
 /// What a *calibrated* map of the same triplets would score: the spread of ECE and of the
@@ -161,34 +169,68 @@ pub const CHANCE_DRAWS: usize = 1000;
 /// # Errors
 /// Truth errors (coincident surveyed landmarks).
 pub fn chance(map: &Pqrm, truth: &GroundTruth, draws: usize, seed: u64) -> Result<Chance> {
-    // per scored set: its cumulative belief, its ML state, P(ML), and its unordered triplet
-    let mut groups: std::collections::BTreeMap<[u32; 3], usize> = std::collections::BTreeMap::new();
-    let mut scored: Vec<(Vec<f64>, usize, f64, usize)> = Vec::new();
+    let mut scored = Vec::new();
     for (set, belief) in map.iter() {
         if truth.state(map.calculus(), set)?.is_none() {
             continue;
         }
-        let mut key = set.ids();
-        key.sort_unstable();
-        let next = groups.len();
-        let group = *groups.entry(key).or_insert(next);
-        let p = belief.probabilities();
-        let cumulative: Vec<f64> = p
-            .iter()
-            .scan(0.0, |acc, v| {
-                *acc += v;
-                Some(*acc)
-            })
-            .collect();
-        let ml = belief.ml_state().index();
-        scored.push((cumulative, ml, p[ml], group));
+        scored.push((belief.probabilities(), belief.ml_state().index(), set.ids()));
     }
-    Ok(chance_of(&scored, groups.len(), draws, seed))
+    Ok(chance_with(&EDGES, scored, draws, seed))
+}
+
+/// [`Chance`] of any predictions scored in a reliability diagram over the bins between
+/// `edges`: each prediction's probabilities over the states and the triplet it is of
+/// (predictions of one unordered triplet — its orderings, or the triplet predicted again in
+/// another trial — share one draw, as their true states are one geometry's). The ML state is
+/// the first most probable one. The reasoning study's inferred beliefs are judged with it
+/// (`crate::reason_study`, ten equal bins).
+#[must_use]
+pub fn chance_of_predictions(
+    edges: &[f64],
+    predictions: &[(Vec<f64>, [u32; 3])],
+    draws: usize,
+    seed: u64,
+) -> Chance {
+    let scored = predictions.iter().map(|(p, triplet)| {
+        let ml = (0..p.len()).fold(0, |b, i| if p[i] > p[b] { i } else { b });
+        (p.clone(), ml, *triplet)
+    });
+    chance_with(edges, scored, draws, seed)
+}
+
+/// [`Chance`] of predictions given as (probabilities, ML state, triplet): each one's
+/// cumulative belief and group (its unordered triplet) for [`chance_of`].
+fn chance_with(
+    edges: &[f64],
+    predictions: impl IntoIterator<Item = (Vec<f64>, usize, [u32; 3])>,
+    draws: usize,
+    seed: u64,
+) -> Chance {
+    let mut groups: std::collections::BTreeMap<[u32; 3], usize> = std::collections::BTreeMap::new();
+    let scored: Vec<(Vec<f64>, usize, f64, usize)> = predictions
+        .into_iter()
+        .map(|(p, ml, mut key)| {
+            key.sort_unstable();
+            let next = groups.len();
+            let group = *groups.entry(key).or_insert(next);
+            let cumulative: Vec<f64> = p
+                .iter()
+                .scan(0.0, |acc, v| {
+                    *acc += v;
+                    Some(*acc)
+                })
+                .collect();
+            (cumulative, ml, p.get(ml).copied().unwrap_or(0.0), group)
+        })
+        .collect();
+    chance_of(edges, &scored, groups.len(), draws, seed)
 }
 
 /// [`chance`] of scored beliefs: each one's cumulative belief, ML state, P(ML) and group (its
 /// unordered triplet, `< n_groups`).
 fn chance_of(
+    edges: &[f64],
     scored: &[(Vec<f64>, usize, f64, usize)],
     n_groups: usize,
     draws: usize,
@@ -204,16 +246,19 @@ fn chance_of(
         (Vec::with_capacity(draws), Vec::with_capacity(draws), 0);
     for _ in 0..draws {
         u.iter_mut().for_each(|v| *v = rng.random::<f64>());
-        let d = diagram(scored.iter().map(|(cumulative, ml, p, group)| {
-            // the drawn state: the first whose cumulative belief passes u (the last one if
-            // rounding leaves the total below u)
-            let at = u[*group] * cumulative.last().copied().unwrap_or(1.0);
-            let state = cumulative
-                .iter()
-                .position(|c| *c > at)
-                .unwrap_or(cumulative.len().saturating_sub(1));
-            (*p, state == *ml)
-        }));
+        let d = diagram_with(
+            edges,
+            scored.iter().map(|(cumulative, ml, p, group)| {
+                // the drawn state: the first whose cumulative belief passes u (the last one if
+                // rounding leaves the total below u)
+                let at = u[*group] * cumulative.last().copied().unwrap_or(1.0);
+                let state = cumulative
+                    .iter()
+                    .position(|c| *c > at)
+                    .unwrap_or(cumulative.len().saturating_sub(1));
+                (*p, state == *ml)
+            }),
+        );
         passes += usize::from(d.is_calibrated());
         eces.push(d.ece);
         gaps.push(d.max_gap);
@@ -246,14 +291,14 @@ mod tests {
 
     #[test]
     fn certain_beliefs_are_calibrated_in_every_draw() {
-        let c = chance_of(&beliefs(300, 1.0, 1), 300, 200, 1);
+        let c = chance_of(&EDGES, &beliefs(300, 1.0, 1), 300, 200, 1);
         assert_eq!((c.ece, c.max_gap, c.pass_rate), ([0.0; 2], [0.0; 2], 1.0));
     }
 
     #[test]
     fn many_independent_triplets_leave_little_to_chance() {
         // 3,000 triplets at P(ML) = 0.75: the drawn accuracy is 0.75 ± 0.008
-        let c = chance_of(&beliefs(3000, 0.75, 1), 3000, 400, 2);
+        let c = chance_of(&EDGES, &beliefs(3000, 0.75, 1), 3000, 400, 2);
         assert!(c.ece[0] < 0.01 && c.ece[1] < 0.02, "{c:?}");
         assert!(c.ece[1] > c.ece[0] && c.pass_rate > 0.99, "{c:?}");
     }
@@ -261,8 +306,8 @@ mod tests {
     #[test]
     fn orderings_of_one_triplet_share_a_draw_and_widen_the_band() {
         // 180 ordered sets: as 180 triplets, or as 30 triplets in six orderings each
-        let alone = chance_of(&beliefs(180, 0.75, 1), 180, 1000, 3);
-        let six = chance_of(&beliefs(180, 0.75, 6), 30, 1000, 3);
+        let alone = chance_of(&EDGES, &beliefs(180, 0.75, 1), 180, 1000, 3);
+        let six = chance_of(&EDGES, &beliefs(180, 0.75, 6), 30, 1000, 3);
         // one bin of 180 at p = 0.75: |accuracy − 0.75| has sd √(0.75·0.25/k), k the triplets
         let sd = |k: f64| (0.75f64 * 0.25 / k).sqrt();
         assert!((alone.ece[1] - 1.96 * sd(180.0)).abs() < 0.015, "{alone:?}");
@@ -277,7 +322,13 @@ mod tests {
     #[test]
     fn the_same_seed_draws_the_same_band() {
         let b = beliefs(500, 0.8, 3);
-        assert_eq!(chance_of(&b, 167, 300, 9), chance_of(&b, 167, 300, 9));
-        assert_ne!(chance_of(&b, 167, 300, 9), chance_of(&b, 167, 300, 10));
+        assert_eq!(
+            chance_of(&EDGES, &b, 167, 300, 9),
+            chance_of(&EDGES, &b, 167, 300, 9)
+        );
+        assert_ne!(
+            chance_of(&EDGES, &b, 167, 300, 9),
+            chance_of(&EDGES, &b, 167, 300, 10)
+        );
     }
 }

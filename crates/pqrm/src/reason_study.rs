@@ -17,6 +17,7 @@ use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
 
+use crate::calibration::{CHANCE_DRAWS, Chance, chance_of_predictions};
 use crate::error::{PqrmError, Result};
 use crate::evidence::EvidenceModel;
 use crate::likelihood::LandmarkSet;
@@ -226,7 +227,16 @@ pub struct Score {
     pub calibration_error: f64,
     /// Ten equal-width bins of P(ML).
     pub bins: Vec<CalibrationBin>,
+    /// What calibrated predictions of the same sets would score over the same bins (their
+    /// true states drawn from the predictions, one draw per triplet): kept for the inferred
+    /// hidden sets of the recording, not computed (`draws` 0) for the baselines and the
+    /// simulated worlds.
+    #[serde(default)]
+    pub chance: Chance,
 }
+
+/// The bin edges of [`Score::bins`]: ten equal widths.
+const SCORE_EDGES: [f64; 11] = [0.0, 0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9, 1.0];
 
 /// Sums over scored predictions. Ties among the most probable states are broken at random
 /// in expectation (a uniform prediction scores 1 − 1/Q, not the frequency of state 0).
@@ -240,10 +250,23 @@ struct Accumulator {
     covered: usize,
     /// Per bin of P(ML): count, sum of P(ML), expected number right.
     bins: [(usize, f64, f64); 10],
+    /// Every prediction and its triplet, where [`Score::chance`] is wanted.
+    kept: Option<Vec<(Vec<f64>, [u32; 3])>>,
 }
 
 impl Accumulator {
-    fn add(&mut self, calc: &Calculus, p: &[f64], truth: StateId) {
+    /// An accumulator that keeps its predictions for [`Score::chance`].
+    fn keeping() -> Self {
+        Self {
+            kept: Some(Vec::new()),
+            ..Self::default()
+        }
+    }
+
+    fn add(&mut self, calc: &Calculus, p: &[f64], truth: StateId, set: LandmarkSet) {
+        if let Some(kept) = &mut self.kept {
+            kept.push((p.to_vec(), set.ids()));
+        }
         let q = p.len();
         let pm = p.iter().copied().fold(f64::NEG_INFINITY, f64::max);
         let tol = 1e-12 * pm.abs().max(1e-300);
@@ -292,7 +315,8 @@ impl Accumulator {
         self.bins[bin].2 += hit;
     }
 
-    fn score(&self) -> Score {
+    /// The scores; [`Score::chance`] drawn from a generator seeded with `seed`.
+    fn score(&self, seed: u64) -> Score {
         let n = self.n.max(1) as f64;
         let bins: Vec<CalibrationBin> = self
             .bins
@@ -326,6 +350,9 @@ impl Accumulator {
                 .map(|b| b.count as f64 / n * (b.accuracy - b.mean_p).abs())
                 .sum(),
             bins,
+            chance: self.kept.as_ref().map_or_else(Chance::default, |kept| {
+                chance_of_predictions(&SCORE_EDGES, kept, CHANCE_DRAWS, seed)
+            }),
         }
     }
 }
@@ -413,11 +440,20 @@ pub struct ReasonCalculusResult {
     pub picture: Option<ReferencePairPicture>,
 }
 
-fn new_accs() -> Accumulators {
+/// Accumulators for every fusion and the baselines; the fusions' keep their predictions
+/// when `keep` ([`Score::chance`]).
+fn new_accs(keep: bool) -> Accumulators {
     (
         Fusion::ALL
             .iter()
-            .map(|f| (f.name().to_owned(), Accumulator::default()))
+            .map(|f| {
+                let acc = if keep {
+                    Accumulator::keeping()
+                } else {
+                    Accumulator::default()
+                };
+                (f.name().to_owned(), acc)
+            })
             .collect(),
         Accumulator::default(),
         Accumulator::default(),
@@ -430,15 +466,16 @@ fn predictors(
     random: &Accumulator,
     prior: &Accumulator,
     observed: Option<&Accumulator>,
+    seed: u64,
 ) -> Predictors {
     Predictors {
         inferred: fusions
             .iter()
-            .map(|(k, a)| (k.clone(), a.score()))
+            .map(|(k, a)| (k.clone(), a.score(seed)))
             .collect(),
-        random: random.score(),
-        prior: prior.score(),
-        observed: observed.map(Accumulator::score),
+        random: random.score(seed),
+        prior: prior.score(seed),
+        observed: observed.map(|a| a.score(seed)),
     }
 }
 
@@ -515,13 +552,13 @@ fn score_hidden(
         for f in Fusion::ALL {
             let p = inferrer.fuse(&ps, f);
             if let Some(acc) = accs.0.get_mut(f.name()) {
-                acc.add(calc, &p, t);
+                acc.add(calc, &p, t, *set);
             }
         }
-        accs.1.add(calc, &uniform, t);
-        accs.2.add(calc, &prior, t);
+        accs.1.add(calc, &uniform, t, *set);
+        accs.2.add(calc, &prior, t, *set);
         if let Some(p) = full.belief(*set) {
-            accs.3.add(calc, &p, t);
+            accs.3.add(calc, &p, t, *set);
         }
     }
     Ok(())
@@ -560,19 +597,19 @@ fn score_unseen(
                     .inferred(o)
                     .map_or_else(|| uniform.clone(), <[f64]>::to_vec);
                 if let Some(acc) = accs.0.get_mut(f.name()) {
-                    acc.add(calc, &p, t);
+                    acc.add(calc, &p, t, o);
                 }
                 if inf.round > 0
                     && let Some(acc) = reached.0.get_mut(f.name())
                 {
-                    acc.add(calc, &p, t);
+                    acc.add(calc, &p, t, o);
                 }
                 if f == Fusion::Fitted {
-                    accs.1.add(calc, &uniform, t);
-                    accs.2.add(calc, &prior, t);
+                    accs.1.add(calc, &uniform, t, o);
+                    accs.2.add(calc, &prior, t, o);
                     if inf.round > 0 {
-                        reached.1.add(calc, &uniform, t);
-                        reached.2.add(calc, &prior, t);
+                        reached.1.add(calc, &uniform, t, o);
+                        reached.2.add(calc, &prior, t, o);
                     }
                 }
             }
@@ -641,7 +678,7 @@ fn hide_and_infer(
     config: &ReasonStudyConfig,
     progress: &dyn Progress,
 ) -> Result<(Predictors, Option<ReferencePairPicture>)> {
-    let mut accs = new_accs();
+    let mut accs = new_accs(true);
     let mut picture = None;
     for repeat in 0..config.repeats {
         let mut rng = ChaCha8Rng::seed_from_u64(
@@ -676,7 +713,7 @@ fn hide_and_infer(
         progress.tick();
     }
     Ok((
-        predictors(&accs.0, &accs.1, &accs.2, Some(&accs.3)),
+        predictors(&accs.0, &accs.1, &accs.2, Some(&accs.3), config.seed),
         picture,
     ))
 }
@@ -724,8 +761,8 @@ fn infer_unseen_in_simulation(
     config: &ReasonStudyConfig,
     progress: &dyn Progress,
 ) -> Result<(Predictors, Predictors, usize, Vec<usize>)> {
-    let mut accs_b = new_accs();
-    let mut reached_b = new_accs();
+    let mut accs_b = new_accs(false);
+    let mut reached_b = new_accs(false);
     let mut unseen_sets = 0;
     let mut unseen_rounds = vec![0; config.rounds + 1];
     for w in 0..config.worlds_b {
@@ -762,8 +799,8 @@ fn infer_unseen_in_simulation(
         progress.tick();
     }
     Ok((
-        predictors(&accs_b.0, &accs_b.1, &accs_b.2, None),
-        predictors(&reached_b.0, &reached_b.1, &reached_b.2, None),
+        predictors(&accs_b.0, &accs_b.1, &accs_b.2, None, config.seed),
+        predictors(&reached_b.0, &reached_b.1, &reached_b.2, None, config.seed),
         unseen_sets,
         unseen_rounds,
     ))
@@ -863,10 +900,26 @@ pub fn claims(r: &ReasonCalculusResult, fusion: Fusion) -> Vec<Claim> {
                 "{}: inference of hidden sets is calibrated (ECE ≤ 0.05)",
                 r.calculus
             ),
-            ours: format!(
-                "ECE {:.3} over {} predictions",
-                inf.calibration_error, inf.n
-            ),
+            ours: if inf.chance.draws > 0 {
+                format!(
+                    "ECE {:.3} over {} predictions; calibrated predictions of the same sets: \
+                     ECE {:.3} (median), {:.3} (95th percentile) — {}",
+                    inf.calibration_error,
+                    inf.n,
+                    inf.chance.ece[0],
+                    inf.chance.ece[1],
+                    if inf.chance.ece_beyond(inf.calibration_error) {
+                        "beyond chance"
+                    } else {
+                        "within chance"
+                    }
+                )
+            } else {
+                format!(
+                    "ECE {:.3} over {} predictions",
+                    inf.calibration_error, inf.n
+                )
+            },
             holds: inf.n > 0 && inf.calibration_error <= 0.05,
         });
     }
@@ -945,6 +998,61 @@ mod tests {
 
     use super::*;
 
+    fn set(k: u32) -> LandmarkSet {
+        LandmarkSet::new(3 * k, 3 * k + 1, 3 * k + 2)
+    }
+
+    /// Inferred predictions kept for the chance band: honest ones (P(ML) 0.7, right 70 % of
+    /// the time) score an ECE within it, overconfident ones (P(ML) 0.95, right 70 %) beyond
+    /// it, and the claim's text says which; the baselines keep nothing.
+    #[test]
+    fn the_hidden_sets_ece_is_judged_against_what_chance_gives() {
+        use rand::{RngExt, SeedableRng};
+        let calc = Calculus::builtin("double-cross").unwrap();
+        let q = calc.n_states();
+        let belief = |p_ml: f64| {
+            let mut p = vec![(1.0 - p_ml) / (q - 1) as f64; q];
+            p[0] = p_ml;
+            p
+        };
+        let mut rng = ChaCha8Rng::seed_from_u64(4);
+        let (mut honest, mut bold) = (Accumulator::keeping(), Accumulator::keeping());
+        for k in 0..600 {
+            let truth = StateId(if rng.random::<f64>() < 0.7 { 0 } else { 1 });
+            honest.add(&calc, &belief(0.7), truth, set(k));
+            bold.add(&calc, &belief(0.95), truth, set(k));
+        }
+        let (honest, bold) = (honest.score(9), bold.score(9));
+        assert_eq!(honest.chance.draws, CHANCE_DRAWS);
+        assert!(
+            !honest.chance.ece_beyond(honest.calibration_error),
+            "{honest:?}"
+        );
+        assert!(
+            bold.chance.ece_beyond(bold.calibration_error),
+            "{:?}",
+            bold.chance
+        );
+        assert!(
+            bold.chance.ece[1] < 0.05,
+            "600 triplets leave little to chance"
+        );
+        assert_eq!(Accumulator::default().score(9).chance.draws, 0);
+        let mut r = ReasonCalculusResult {
+            calculus: "x".into(),
+            ..ReasonCalculusResult::default()
+        };
+        r.hidden.inferred.insert("fitted".into(), bold);
+        let c = claims(&r, Fusion::Fitted);
+        let calibrated = c.iter().find(|c| c.what.contains("calibrated")).unwrap();
+        assert!(!calibrated.holds);
+        assert!(
+            calibrated.ours.contains("beyond chance"),
+            "{}",
+            calibrated.ours
+        );
+    }
+
     #[test]
     fn a_uniform_prediction_scores_as_chance_not_as_state_zero() {
         let calc = Calculus::builtin("double-cross").unwrap();
@@ -952,9 +1060,9 @@ mod tests {
         let mut acc = Accumulator::default();
         // Truth is always state 0: an argmax with lowest-id ties would score 0 % error.
         for _ in 0..10 {
-            acc.add(&calc, &vec![1.0 / q as f64; q], StateId(0));
+            acc.add(&calc, &vec![1.0 / q as f64; q], StateId(0), set(0));
         }
-        let s = acc.score();
+        let s = acc.score(0);
         assert!(
             (s.error_rate - (1.0 - 1.0 / q as f64)).abs() < 1e-12,
             "{}",
@@ -971,9 +1079,9 @@ mod tests {
         let mut acc = Accumulator::default();
         let mut p = vec![0.0; q];
         p[2] = 1.0;
-        acc.add(&calc, &p, StateId(2));
-        acc.add(&calc, &p, StateId(3));
-        let s = acc.score();
+        acc.add(&calc, &p, StateId(2), set(0));
+        acc.add(&calc, &p, StateId(3), set(1));
+        let s = acc.score(0);
         assert!((s.error_rate - 0.5).abs() < 1e-12);
         assert_eq!(s.bins[9].count, 2);
         assert!((s.bins[9].accuracy - 0.5).abs() < 1e-12);
