@@ -394,6 +394,30 @@ fn study_runs_on_mrclam_and_judges_its_claims() {
         csv.starts_with("calculus,part,predictor,n,error_rate,"),
         "{csv}"
     );
+    // the hidden sets' inference carries what chance gives calibrated predictions of them
+    // (median ≤ 95th percentile, both in [0, 1]); the baselines leave it empty
+    let header: Vec<&str> = csv.lines().next().unwrap().split(',').collect();
+    let col = |name: &str| header.iter().position(|h| *h == name).unwrap();
+    let (median, p95) = (col("chance_ece_median"), col("chance_ece_95"));
+    let rows: Vec<Vec<&str>> = csv
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').collect())
+        .collect();
+    let inferred = rows
+        .iter()
+        .find(|r| r[1] == "hidden" && r[2].starts_with("inferred"))
+        .unwrap();
+    let (m, p): (f64, f64) = (
+        inferred[median].parse().unwrap(),
+        inferred[p95].parse().unwrap(),
+    );
+    assert!((0.0..=p).contains(&m) && p <= 1.0, "{csv}");
+    let prior = rows
+        .iter()
+        .find(|r| r[1] == "hidden" && r[2] == "prior")
+        .unwrap();
+    assert!(prior[median].is_empty(), "{csv}");
     assert!(out.join("check.csv").is_file() && out.join("config.toml").is_file());
 }
 

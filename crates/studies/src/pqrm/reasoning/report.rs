@@ -130,6 +130,12 @@ fn score(v: f64) -> Cell {
     }
 }
 
+/// What chance gives calibrated predictions of the same sets ([`Score::chance`]: its median
+/// for `at` 0, 95th percentile for 1); empty where it was not computed (the baselines).
+fn chance(s: &Score, at: usize) -> Cell {
+    Cell::maybe((s.chance.draws > 0).then_some(s.chance.ece[at]), score)
+}
+
 fn scores_table(results: &[ReasonCalculusResult]) -> Table {
     let mut t = Table::new(
         "scores",
@@ -145,6 +151,8 @@ fn scores_table(results: &[ReasonCalculusResult]) -> Table {
             Column::new("log_loss", "log loss"),
             Column::new("coverage", "coverage"),
             Column::new("calibration_error", "ECE"),
+            Column::new("chance_ece_median", "ECE if calibrated: median"),
+            Column::new("chance_ece_95", "95th pct"),
         ],
     );
     for r in results {
@@ -160,6 +168,8 @@ fn scores_table(results: &[ReasonCalculusResult]) -> Table {
                 score(s.log_loss),
                 score(s.coverage),
                 score(s.calibration_error),
+                chance(s, 0),
+                chance(s, 1),
             ]);
         }
     }
