@@ -537,9 +537,26 @@ fn check_apart<const ORDERS: usize>(
 }
 
 /// The error for a triplet with two coincident landmarks in a sample.
+/// Or, where the coordinates are so large that a squared distance overflows (the checks then
+/// read `inf ≤ inf`), that: the real cause rather than "coincide".
 fn coincident(samples: &ScanSamples, [i, j, k]: [usize; 3]) -> PqrmError {
+    let set = [samples.ids()[i].0, samples.ids()[j].0, samples.ids()[k].0];
+    let largest = [i, j, k]
+        .iter()
+        .flat_map(|&l| {
+            let (x, y) = samples.columns(l);
+            x.iter().chain(y)
+        })
+        .fold(0.0f64, |m, v| m.max(v.abs()));
+    // |B − A|² can reach (2·largest)²·2
+    if !(8.0 * largest * largest).is_finite() {
+        return PqrmError::NonFinite(format!(
+            "landmarks {set:?}: sample coordinates up to {largest:e} are too large for squared \
+             distances (they overflow); keep them below 1e150"
+        ));
+    }
     PqrmError::CoincidentLandmarks {
-        set: [samples.ids()[i].0, samples.ids()[j].0, samples.ids()[k].0],
+        set,
         reason: "two of the three landmarks coincide in a sample (zero noise on one spot?)".into(),
     }
 }
@@ -1826,6 +1843,39 @@ mod tests {
         // 4,060 triplets of 30 landmarks with σ = 0.5 m over 60 × 60 m, s = 200: 857 are
         // settled (at s = 1000 over 101 landmarks, 53 % of triplets have one state throughout)
         assert!(settled * 6 > 4060, "a sixth at least is settled: {settled}");
+    }
+
+    /// Regression: landmarks at 1e300 were reported as coinciding (their squared distances
+    /// overflow and the coincidence check reads inf ≤ inf); the error names the overflow.
+    /// Landmarks that do coincide still say so.
+    #[test]
+    fn coordinates_whose_squares_overflow_are_named_not_called_coincident() {
+        use super::{Orderings, PqrmError, ScanSamples, step_counts};
+        use crate::observation::LandmarkId;
+        use qsr_core::Calculus;
+        let ids = vec![LandmarkId(1), LandmarkId(2), LandmarkId(3)];
+        let edc = Calculus::builtin("edc").unwrap();
+        let huge = ScanSamples::from_columns(
+            ids.clone(),
+            vec![vec![1e300, -1e300], vec![-1e300, 1e300], vec![1e299, 5e299]],
+            vec![vec![1e300; 2], vec![-1e300; 2], vec![0.0; 2]],
+        )
+        .unwrap();
+        for orderings in [Orderings::All, Orderings::Canonical] {
+            let e = step_counts(&edc, &huge, orderings).unwrap_err();
+            assert!(
+                matches!(&e, PqrmError::NonFinite(m) if m.contains("overflow")),
+                "{e}"
+            );
+        }
+        let same = ScanSamples::from_columns(
+            ids,
+            vec![vec![1.0; 4], vec![1.0; 4], vec![2.0; 4]],
+            vec![vec![0.0; 4]; 3],
+        )
+        .unwrap();
+        let e = step_counts(&edc, &same, Orderings::All).unwrap_err();
+        assert!(matches!(e, PqrmError::CoincidentLandmarks { .. }), "{e}");
     }
 
     #[test]

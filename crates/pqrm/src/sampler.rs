@@ -103,8 +103,8 @@ impl ScanSamples {
     /// coordinate is finite.
     ///
     /// # Errors
-    /// [`PqrmError::InvalidConfig`] for columns of different lengths or unsorted or repeated
-    /// ids, [`PqrmError::NonFinite`] for a NaN or infinite coordinate (naming landmark and
+    /// [`PqrmError::InvalidConfig`] for columns of different lengths, none at all, or unsorted
+    /// or repeated ids, [`PqrmError::NonFinite`] for a NaN or infinite coordinate (naming landmark and
     /// sample).
     ///
     /// ```
@@ -136,6 +136,11 @@ impl ScanSamples {
             )));
         }
         let s = xs.first().map_or(0, Vec::len);
+        if s == 0 && !ids.is_empty() {
+            return Err(PqrmError::InvalidConfig(
+                "samples: every landmark needs at least one sample, the first has none".into(),
+            ));
+        }
         for ((id, x), y) in ids.iter().zip(&xs).zip(&ys) {
             if x.len() != s || y.len() != s {
                 return Err(PqrmError::InvalidConfig(format!(
@@ -174,5 +179,42 @@ impl ScanSamples {
     #[must_use]
     pub fn samples(&self) -> usize {
         self.xs.first().map_or(0, Vec::len)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    #![allow(clippy::unwrap_used)] // tests: a panic is the failure report
+    use super::*;
+
+    /// Samples from elsewhere: every malformed input is a typed error naming what is wrong,
+    /// and well-formed columns come back as given.
+    #[test]
+    fn columns_from_elsewhere_are_checked() {
+        let ids = |v: &[u32]| v.iter().map(|&i| LandmarkId(i)).collect::<Vec<_>>();
+        let col = |n: usize| vec![vec![0.5; n], vec![1.5; n]];
+        let s = ScanSamples::from_columns(ids(&[2, 7]), col(3), col(3)).unwrap();
+        assert_eq!((s.ids(), s.samples()), (&ids(&[2, 7])[..], 3));
+        assert_eq!(s.columns(1), (&[1.5; 3][..], &[1.5; 3][..]));
+        let err = |i: &[u32], xs: Vec<Vec<f64>>, ys: Vec<Vec<f64>>| {
+            ScanSamples::from_columns(ids(i), xs, ys)
+                .unwrap_err()
+                .to_string()
+        };
+        assert!(err(&[7, 2], col(3), col(3)).contains("strictly increasing"));
+        assert!(err(&[2, 2], col(3), col(3)).contains("strictly increasing"));
+        assert!(err(&[2], col(3), col(3)).contains("1 ids but 2 x columns"));
+        assert!(err(&[2, 7], col(0), col(0)).contains("at least one sample"));
+        assert!(err(&[2, 7], col(3), vec![vec![0.0; 3], vec![0.0; 2]]).contains("landmark 7"));
+        let mut bad = col(3);
+        bad[1][2] = f64::NAN;
+        let e = err(&[2, 7], bad, col(3));
+        assert!(e.contains("landmark 7, sample 2"), "{e}");
+        assert!(
+            ScanSamples::from_columns(Vec::new(), Vec::new(), Vec::new())
+                .unwrap()
+                .ids()
+                .is_empty()
+        );
     }
 }
