@@ -115,8 +115,9 @@ fn diagram_with(edges: &[f64], scored: impl IntoIterator<Item = (f64, bool)>) ->
     out
 }
 
-/// The bin of a P(ML) between `edges` (the last bin includes 1).
-fn bin_of(edges: &[f64], p: f64) -> usize {
+/// The bin of a P(ML) between `edges` (the last bin includes 1). Shared by every reliability
+/// diagram qrm draws, so a score and what chance gives it bin each prediction alike.
+pub(crate) fn bin_of(edges: &[f64], p: f64) -> usize {
     let k = edges.len().saturating_sub(1).max(1);
     edges
         .get(1..)

@@ -309,7 +309,8 @@ impl Accumulator {
         self.log_loss -= pt.max(1e-12).ln();
         let h: f64 = p.iter().filter(|v| **v > 0.0).map(|v| -v * v.ln()).sum();
         self.covered += usize::from(h < (q as f64).ln() - 0.05);
-        let bin = ((pm * 10.0) as usize).min(9);
+        // the bins `chance_of_predictions` scores its draws in
+        let bin = crate::calibration::bin_of(&SCORE_EDGES, pm);
         self.bins[bin].0 += 1;
         self.bins[bin].1 += pm;
         self.bins[bin].2 += hit;
@@ -1086,6 +1087,27 @@ mod tests {
         assert_eq!(s.bins[9].count, 2);
         assert!((s.bins[9].accuracy - 0.5).abs() < 1e-12);
         assert!((s.calibration_error - 0.5).abs() < 1e-12);
+    }
+
+    /// Regression: the score binned P(ML) by `⌊10·p⌋`, the chance band by comparing with the
+    /// edges; 0.8999999999999999 times 10 rounds to 9, so the two put it in different bins.
+    #[test]
+    fn a_prediction_just_below_an_edge_is_binned_as_the_chance_band_bins_it() {
+        let calc = Calculus::builtin("left-right").unwrap();
+        let p_ml = 0.899_999_999_999_999_9_f64;
+        assert!(
+            p_ml < 0.9 && (p_ml * 10.0) as usize == 9,
+            "the edge case itself"
+        );
+        let mut acc = Accumulator::default();
+        let mut p = vec![0.0; calc.n_states()];
+        p[0] = p_ml;
+        p[1] = 1.0 - p_ml;
+        acc.add(&calc, &p, StateId(0), set(0));
+        let s = acc.score(0);
+        assert_eq!(s.bins[8].count, 1);
+        assert_eq!(s.bins[9].count, 0);
+        assert_eq!(crate::calibration::bin_of(&SCORE_EDGES, p_ml), 8);
     }
 
     #[test]
