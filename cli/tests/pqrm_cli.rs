@@ -986,5 +986,20 @@ fn the_real_data_study_scores_every_recording_given() {
     }
     assert!(report.contains("Every recording: ECE within what chance gives a calibrated map"));
     assert!(report.contains("passes all 12 rows with probability"));
+    // the survey against the robots: every row splits its scored sets in two
+    let survey = std::fs::read_to_string(out.join("survey.csv")).unwrap();
+    assert_eq!(survey.lines().count(), 1 + 2 * 6, "{survey}");
+    let head: Vec<&str> = survey.lines().next().unwrap().split(',').collect();
+    let col = |k: &str| head.iter().position(|h| *h == k).expect(k);
+    for line in survey.lines().skip(1) {
+        let f: Vec<&str> = line.split(',').collect();
+        let n = |k: &str| f[col(k)].parse::<usize>().unwrap();
+        assert!(
+            n("pairs_seen") > 0 && n("pairs_off") <= n("pairs_seen"),
+            "{line}"
+        );
+        assert!(n("sets_agreed") + n("sets_disputed") > 0, "{line}");
+    }
+    assert!(report.contains("The survey against the robots"));
     std::fs::remove_dir_all(&out).ok();
 }

@@ -78,7 +78,7 @@ pub fn calibration(map: &Pqrm, truth: &GroundTruth) -> Result<Calibration> {
 
 /// The reliability diagram of scored beliefs: each one's P(ML) and whether its ML state is
 /// the true one.
-fn diagram(scored: impl IntoIterator<Item = (f64, bool)>) -> Calibration {
+pub(crate) fn diagram(scored: impl IntoIterator<Item = (f64, bool)>) -> Calibration {
     diagram_with(&EDGES, scored)
 }
 

@@ -26,6 +26,9 @@
 //! - **Shared error** ([`evidence`]): frames of one set that share an error prove less than
 //!   eq. 2.10 says; the shared-error model reads each set's stored sum with an exponent that
 //!   caps its evidence, so a real recording's probabilities are ones a robot can bet on.
+//! - **The survey checked against the robots** ([`survey`]): a map scored against surveyed
+//!   positions is split into the sets whose landmark pairs every frame sees as surveyed and
+//!   those it does not, so a report says which misses the survey itself explains.
 //! - **Determinism**: every landmark's samples are seeded by `(seed, step, id)`; results do not
 //!   depend on the thread count.
 //!
@@ -61,6 +64,7 @@ pub mod sensor;
 mod spread;
 mod store;
 pub mod study;
+pub mod survey;
 pub mod temper;
 
 pub use error::{PqrmError, Result};

@@ -690,6 +690,10 @@ pub struct RealCalculusResult {
     pub vote_log_loss: f64,
     /// Random-guess baselines.
     pub random: Baselines,
+    /// The reliability diagram split by whether the survey agrees with the frames on the
+    /// set's landmark pairs ([`crate::survey`]).
+    #[serde(default)]
+    pub survey: crate::survey::SurveySplit,
 }
 
 /// Maps a recorded dataset with every calculus and scores PQRM and the per-frame baseline.
@@ -791,10 +795,16 @@ pub fn run_real_tempered(
             maps[i].apply_counts(&counts)?;
         }
     }
+    let agreement = crate::survey::SurveyAgreement::measure(
+        &dataset.scans,
+        truth,
+        crate::survey::OFF_SURVEY_M,
+        crate::survey::MIN_FRAMES,
+    );
     maps.iter()
         .zip(&votes)
         .zip(&frames)
-        .map(|((map, votes), frames)| real_result(map, truth, votes, frames))
+        .map(|((map, votes), frames)| real_result(map, truth, votes, frames, &agreement))
         .collect()
 }
 
@@ -853,6 +863,7 @@ fn real_result(
     truth: &crate::metrics::GroundTruth,
     votes: &BTreeMap<LandmarkSet, Votes>,
     frames: &FrameTally,
+    agreement: &crate::survey::SurveyAgreement,
 ) -> Result<RealCalculusResult> {
     let calc = map.calculus();
     let (mut vn, mut vwrong, mut vdist) = (0usize, 0usize, 0u64);
@@ -899,6 +910,7 @@ fn real_result(
         entropies: map.iter().map(|(_, b)| b.entropy()).collect(),
         per_frame: frames.metrics(),
         random: random_baselines(calc),
+        survey: crate::survey::split(map, truth, agreement)?,
     })
 }
 

@@ -12,6 +12,7 @@
 use pqrm::EvidenceModel;
 use pqrm::calibration::{CALIBRATED_ECE, CALIBRATED_GAP, CalibrationBin, Chance, MIN_BIN};
 use pqrm::study::{RealCalculusResult, run_real_tempered};
+use pqrm::survey::{MIN_FRAMES, OFF_SURVEY_M, STANDARD_ERRORS, SurveySplit};
 use pqrm::temper::{TemperChoice, TemperOptions, fit_temper};
 use qsr_core::Calculus;
 use qsr_core::progress::{Progress, phase};
@@ -52,6 +53,9 @@ pub struct RecordingRow {
     /// What a calibrated map of the same triplets scores by chance.
     #[serde(default)]
     pub chance: Chance,
+    /// The reliability diagram split by whether the survey agrees with the frames.
+    #[serde(default)]
+    pub survey: SurveySplit,
 }
 
 impl RecordingRow {
@@ -70,6 +74,7 @@ impl RecordingRow {
             vote_log_loss: r.vote_log_loss,
             bins: r.calibration.bins.clone(),
             chance: r.chance.clone(),
+            survey: r.survey.clone(),
         }
     }
 
@@ -241,6 +246,72 @@ pub fn table(rows: &[RecordingRow]) -> Table {
     t
 }
 
+/// `survey.csv`: each row's calibration on the sets whose landmark pairs every frame sees as
+/// surveyed, and on the sets with a pair it does not ([`pqrm::survey`]).
+#[must_use]
+pub fn survey_table(rows: &[RecordingRow]) -> Table {
+    let mut t = Table::new(
+        "survey",
+        "The survey against the robots",
+        vec![
+            Column::new("recording", "recording"),
+            Column::new("calculus", "calculus"),
+            Column::new("pairs_seen", "landmark pairs seen"),
+            Column::new("pairs_off", "off the survey"),
+            Column::new("sets_agreed", "sets: no pair off"),
+            Column::new("accuracy_agreed", "their accuracy"),
+            Column::new("ece_agreed", "their ECE"),
+            Column::new("sets_disputed", "sets: a pair off"),
+            Column::new("accuracy_disputed", "their accuracy"),
+            Column::new("ece_disputed", "their ECE"),
+        ],
+    )
+    .caption(format!(
+        "A landmark pair is off the survey when the median over the frames that saw it (≥ {MIN_FRAMES}) of the distance seen \
+         minus the surveyed one is beyond {OFF_SURVEY_M} m and beyond {STANDARD_ERRORS} standard errors of the median: every robot sees it otherwise than surveyed (a landmark moved, a \
+         survey slip, or an error all robots' perception shares). A map cannot hedge for that without the survey, so the \
+         calibration of the sets with such a pair says how much of a miss the survey explains. No verdict depends on it."
+    ));
+    let cell = |n: usize, x: f64| {
+        if n == 0 {
+            Cell::text(String::new())
+        } else {
+            Cell::number(x, 3)
+        }
+    };
+    for r in rows {
+        let (agreed, disputed) = (&r.survey.agreed, &r.survey.disputed);
+        let (na, nd) = (sets(agreed), sets(disputed));
+        t.push(vec![
+            Cell::text(r.recording.clone()),
+            Cell::text(r.calculus.clone()),
+            Cell::int(r.survey.pairs_seen as u64),
+            Cell::int(r.survey.pairs_off as u64),
+            Cell::int(na as u64),
+            cell(na, accuracy(agreed)),
+            cell(na, agreed.ece),
+            Cell::int(nd as u64),
+            cell(nd, accuracy(disputed)),
+            cell(nd, disputed.ece),
+        ]);
+    }
+    t
+}
+
+/// Sets in a reliability diagram.
+fn sets(c: &pqrm::calibration::Calibration) -> usize {
+    c.bins.iter().map(|b| b.n).sum()
+}
+
+/// The share of a diagram's sets whose most likely state is right.
+fn accuracy(c: &pqrm::calibration::Calibration) -> f64 {
+    let n = sets(c);
+    if n == 0 {
+        return 0.0;
+    }
+    c.bins.iter().map(|b| b.accuracy * b.n as f64).sum::<f64>() / n as f64
+}
+
 /// The three bars, each judged over every row: agree only when every recording and calculus
 /// passes (no row, no agreement).
 #[must_use]
@@ -395,7 +466,44 @@ mod tests {
                 max_gap: [0.05, 0.15],
                 pass_rate: 0.7,
             },
+            survey: SurveySplit::default(),
         }
+    }
+
+    /// The survey table: accuracy weighted by each bin's sets, a side with no sets left
+    /// empty rather than scored 0.
+    #[test]
+    fn the_survey_table_weights_bins_and_leaves_empty_sides_empty() {
+        use pqrm::calibration::{Calibration, CalibrationBin};
+        let bin = |n: usize, accuracy: f64| CalibrationBin {
+            lo: 0.9,
+            hi: 1.0,
+            n,
+            mean_p_ml: 0.95,
+            accuracy,
+        };
+        let mut r = row(0.1, 0.1, 0.02, 0.05, 0.3, 0.5);
+        r.survey = SurveySplit {
+            pairs_seen: 10,
+            pairs_off: 0,
+            agreed: Calibration {
+                ece: 0.04,
+                max_gap: 0.1,
+                bins: vec![bin(30, 0.9), bin(10, 0.5)],
+            },
+            disputed: Calibration::default(),
+        };
+        let (header, rows) = survey_table(&[r]).csv_records();
+        let f = &rows[0];
+        let at = |k: &str| header.iter().position(|h| h == k).unwrap();
+        assert_eq!(f[at("sets_agreed")], "40");
+        let acc: f64 = f[at("accuracy_agreed")].parse().unwrap();
+        assert!((acc - 0.8).abs() < 1e-9, "{acc}");
+        let ece: f64 = f[at("ece_agreed")].parse().unwrap();
+        assert!((ece - 0.04).abs() < 1e-9, "{ece}");
+        assert_eq!(f[at("sets_disputed")], "0");
+        assert_eq!(f[at("accuracy_disputed")], "");
+        assert_eq!(f[at("ece_disputed")], "");
     }
 
     #[test]

@@ -42,6 +42,7 @@ pub fn report(config: &RealDataConfig, out: &RealDataOutput) -> Report {
     tables.push(sensor_models_table(&out.sensor_models));
     let recording_rows = super::recordings::rows(out);
     tables.push(super::recordings::table(&recording_rows));
+    tables.push(super::recordings::survey_table(&recording_rows));
     if !m.robots.is_empty() {
         tables.push(many_robots_table(&m.robots));
         tables.push(robots_csv(&m.robots));
