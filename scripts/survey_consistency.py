@@ -12,8 +12,8 @@ miscalibration sits there:
    as `qrm map` reads it: noise fitted, gross outliers gated), the median over frames of the
    distance seen minus the surveyed one. A pair is *off the survey* when that median is beyond
    `--off` metres (default 0.1 m, 3–5 % of the recordings' inter-cluster distances) and beyond
-   three standard errors of the median (1.2533 · 1.4826 · MAD / √n) — the rule of
-   `pqrm::survey`, which `qrm pqrm real` reports in `survey.csv`.
+   three standard errors of the median (1.2533 · 1.4826 · MAD / √n): `qrm.survey_agreement`
+   (`pqrm::survey`, what `qrm pqrm real` reports in `survey.csv`).
 2. Each recording mapped with `qrm map` under each `--evidence` model, and its beliefs scored
    against the survey separately for the sets with no pair off the survey and the sets with
    one: accuracy, mean P(ML), ECE over ten equal P(ML) bins, log loss.
@@ -26,36 +26,15 @@ Needs numpy, the qrm wheel (to read recordings and maps, and to classify the sur
 """
 
 import argparse
-import collections
 import itertools
 import pathlib
 import subprocess
 import tempfile
-from typing import Dict, List, Tuple
+from typing import Dict, Tuple
 
 import numpy as np
 
 import qrm
-
-Pair = Tuple[int, int]
-
-
-def pair_offsets(frames: List[dict], survey: Dict[int, Tuple[float, float]]) -> Dict[Pair, Tuple[float, int, float]]:
-    """Median over frames of (distance seen − surveyed distance) per pair, its frame count and
-    the median's standard error."""
-    seen: Dict[Pair, List[float]] = collections.defaultdict(list)
-    for f in frames:
-        pos = {int(i): xy for i, xy in zip(f["ids"], f["xy"]) if int(i) in survey}
-        for a, b in itertools.combinations(sorted(pos), 2):
-            true = float(np.hypot(*np.subtract(survey[a], survey[b])))
-            seen[(a, b)].append(float(np.linalg.norm(pos[a] - pos[b])) - true)
-    out = {}
-    for p, v in seen.items():
-        med = float(np.median(v))
-        se = 1.2533 * 1.4826 * float(np.median(np.abs(np.subtract(v, med)))) / np.sqrt(len(v))
-        out[p] = (med, len(v), se)
-    return out
-
 
 def ece(p_ml: np.ndarray, right: np.ndarray) -> float:
     bins = np.minimum((p_ml * 10).astype(int), 9)
@@ -98,13 +77,12 @@ def main() -> None:
         frames, survey = qrm.read_observations(str(rec), "mrclam")
         if survey is None:
             raise SystemExit(f"{rec} has no survey")
-        offsets = pair_offsets(frames, survey)
-        counted = {p: v for p, v in offsets.items() if v[1] >= a.min_frames}
-        off = {p for p, (med, _, se) in counted.items() if abs(med) > a.off and abs(med) > 3 * se}
-        print(f"## {rec.name}: {len(off)} of {len(counted)} landmark pairs off the survey by more "
-              f"than {a.off} m (median over ≥ {a.min_frames} frames)\n")
+        agreement = qrm.survey_agreement(frames, survey, off=a.off, min_frames=a.min_frames)
+        off = {(p, q): med for p, q, med, _ in agreement["off"]}
+        print(f"## {rec.name}: {len(off)} of {agreement['pairs_seen']} landmark pairs off the survey by "
+              f"more than {a.off} m (median over ≥ {a.min_frames} frames)\n")
         if off:
-            print(", ".join(f"{p[0]}–{p[1]} {counted[p][0]:+.2f}" for p in sorted(off)) + "\n")
+            print(", ".join(f"{p[0]}–{p[1]} {med:+.2f}" for p, med in sorted(off.items())) + "\n")
         print("| evidence | sets: no pair off / a pair off | accuracy | mean P(ML) | ECE | log loss |")
         print("|---|---|---|---|---|---|")
         for ev in a.evidence.split(","):

@@ -105,3 +105,45 @@ def test_sim_run_feeds_the_mapper():
     assert with_scan[0]["ranges"].shape == (1081,)
     with pytest.raises(qrm.SpecError):
         qrm.sim.run("moon", 1)
+
+
+def _frames(positions, offsets):
+    """One scan per offset: every landmark at its position, landmark 4 moved by the offset."""
+    scans = []
+    for k, e in enumerate(offsets):
+        ids = np.array(sorted(positions), dtype=np.int64)
+        xy = np.array([positions[i] for i in ids], dtype=float)
+        if 4 in positions:
+            xy[list(ids).index(4)] += [e, e]
+        scans.append({"t": float(k), "robot": 0, "ids": ids, "xy": xy, "cov": np.tile([0.01, 0.0, 0.01], (len(ids), 1))})
+    return scans
+
+
+def test_the_survey_check_names_the_pairs_every_frame_sees_otherwise():
+    survey = {1: (0.0, 0.0), 2: (4.0, 0.0), 3: (0.0, 3.0), 4: (4.0, 3.0)}
+    # landmark 4 stood 0.3 m off in x and in y in every frame (± 1 cm)
+    got = qrm.survey_agreement(_frames(survey, [0.3, 0.31, 0.29, 0.3, 0.3, 0.305]), survey)
+    assert got["pairs_seen"] == 6
+    assert [(a, b) for a, b, _, _ in got["off"]] == [(1, 4), (2, 4), (3, 4)]
+    for (a, b, median, frames), want in zip(got["off"], [np.hypot(4.3, 3.3) - 5, np.hypot(0.3, 3.3) - 3, np.hypot(4.3, 0.3) - 4]):
+        assert abs(median - want) < 0.02 and frames == 6
+    # frames that scatter by ±0.5 m put no pair off; a stricter frame count judges none
+    loose = qrm.survey_agreement(_frames(survey, [0.5, -0.45, 0.4, -0.5, 0.2, 0.1]), survey)
+    assert loose["off"] == []
+    assert qrm.survey_agreement(_frames(survey, [0.3] * 6), survey, min_frames=7) == {"pairs_seen": 0, "off": []}
+
+
+def test_the_survey_check_refuses_what_it_cannot_read():
+    survey = {1: (0.0, 0.0), 2: (4.0, 0.0)}
+    scans = _frames({1: (0.0, 0.0), 2: (4.0, 0.0), 4: (1.0, 1.0)}, [0.0] * 5)
+    del scans[2]["xy"]
+    with pytest.raises(qrm.InvalidInput, match=r'scans\[2\] has no "xy"'):
+        qrm.survey_agreement(scans, survey)
+    with pytest.raises(qrm.InvalidInput, match="off must be"):
+        qrm.survey_agreement([], survey, off=float("nan"))
+    with pytest.raises(qrm.InvalidInput, match="min_frames"):
+        qrm.survey_agreement([], survey, min_frames=0)
+    bad = _frames({1: (0.0, 0.0), 2: (4.0, 0.0)}, [0.0])
+    bad[0]["xy"][0, 0] = np.nan
+    with pytest.raises(qrm.QrmError, match=r"scans\[0\]"):
+        qrm.survey_agreement(bad, survey)

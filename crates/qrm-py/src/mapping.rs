@@ -423,6 +423,77 @@ fn scan_dict<'py>(py: Python<'py>, s: &pqrm::Scan) -> PyResult<Bound<'py, PyDict
     Ok(d)
 }
 
+// `survey_agreement`'s defaults are literals (Python shows them); they are the library's
+const _: () = assert!(pqrm::survey::OFF_SURVEY_M == 0.1 && pqrm::survey::MIN_FRAMES == 5);
+
+/// Which landmark pairs the survey disagrees with the frames on (`pqrm::survey`, what
+/// `qrm pqrm real` writes in `survey.csv`): for every pair of surveyed landmarks seen together
+/// in at least `min_frames` scans, the median of (distance seen − surveyed distance); a pair
+/// is off the survey when that median is beyond `off` metres and beyond three standard errors
+/// of the median. `scans` as `read_observations` returns them (each a dict with "t", "robot",
+/// "ids", "xy", "cov"), `survey` {landmark: (x, y)}. Returns {"pairs_seen": int, "off":
+/// [(a, b, median, frames)]}, pairs with a < b, in order.
+#[pyfunction]
+#[pyo3(signature = (scans, survey, *, off = 0.1, min_frames = 5))]
+pub(crate) fn survey_agreement<'py>(
+    py: Python<'py>,
+    scans: Vec<Bound<'py, PyDict>>,
+    survey: TruthDict,
+    off: f64,
+    min_frames: usize,
+) -> PyResult<Bound<'py, PyDict>> {
+    if !(off.is_finite() && off >= 0.0) {
+        return Err(invalid(format!(
+            "off must be a finite distance ≥ 0 (metres), got {off}"
+        )));
+    }
+    if min_frames == 0 {
+        return Err(invalid("min_frames must be at least 1"));
+    }
+    let parsed = scans
+        .iter()
+        .enumerate()
+        .map(|(k, d)| {
+            let item = |key: &str| {
+                d.get_item(key)?.ok_or_else(|| {
+                    invalid(format!(
+                        "scans[{k}] has no {key:?} (a scan is a dict with \"t\", \"robot\", \"ids\", \"xy\", \"cov\", as read_observations returns)"
+                    ))
+                })
+            };
+            let t = item("t")?
+                .extract::<f64>()
+                .map_err(|_| invalid(format!("scans[{k}][\"t\"] is not a number")))?;
+            let robot = item("robot")?.extract::<u32>().map_err(|_| {
+                invalid(format!(
+                    "scans[{k}][\"robot\"] is not a non-negative 32-bit integer"
+                ))
+            })?;
+            scan_from_arrays(
+                t,
+                robot,
+                &crate::arrays::ints1(&item("ids")?, "ids")?,
+                &crate::arrays::floats2(&item("xy")?, "xy")?,
+                &crate::arrays::floats2(&item("cov")?, "cov")?,
+            )
+            .map_err(|e| invalid(format!("scans[{k}]: {e}")))
+        })
+        .collect::<PyResult<Vec<Scan>>>()?;
+    let truth = truth_from_dict(&survey);
+    let agreement = crate::pool::detach(py, || {
+        pqrm::survey::SurveyAgreement::measure(&parsed, &truth, off, min_frames)
+    });
+    let d = PyDict::new(py);
+    d.set_item("pairs_seen", agreement.pairs_seen)?;
+    let pairs: Vec<(u32, u32, f64, usize)> = agreement
+        .off
+        .iter()
+        .map(|p| (p.pair[0].0, p.pair[1].0, p.median, p.frames))
+        .collect();
+    d.set_item("off", pairs)?;
+    Ok(d)
+}
+
 /// Reads an observation file as `qrm map` reads it: `format` is "csv", "mrclam" (a
 /// directory), "g2o" or "mcap" (a ROS 2 bag or Foxglove/qrm log; `topic` is one topic or a
 /// list, default: every detection topic, else the one LaserScan topic). MRCLAM's range-bearing

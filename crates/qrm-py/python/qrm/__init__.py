@@ -43,6 +43,7 @@ from ._qrm import (
     builtin_names,
     read_observations,
     single_observation,
+    survey_agreement,
     worker_threads,
 )
 from . import _qrm, reason, sim, types
@@ -81,6 +82,7 @@ __all__ = [
     "sim",
     "single_observation",
     "studies",
+    "survey_agreement",
     "to_pandas",
     "types",
     "worker_threads",

@@ -5,7 +5,7 @@ from typing import Any, Callable, Union, Dict, List, Optional, Tuple, final
 import numpy as np
 import numpy.typing as npt
 
-from .types import ConsistencyCheck, Frame, Inference, MapMetrics, Neighbours, Observations, UpdateReport
+from .types import ConsistencyCheck, Frame, Inference, MapMetrics, Neighbours, Observations, SurveyAgreement, UpdateReport
 
 _Callback = Optional[Callable[[int, int], object]]
 
@@ -23,6 +23,7 @@ __all__ = [
     "BinaryCalculus",
     "Pqrm",
     "read_observations",
+    "survey_agreement",
     "single_observation",
     "monte_carlo_shard",
     "monte_carlo_aggregate",
@@ -258,6 +259,13 @@ def read_observations(
     range_max: Optional[float] = None,
     allow_truncated: bool = False,
 ) -> Tuple[List[Observations], Optional[Dict[int, Tuple[float, float]]]]: ...
+def survey_agreement(
+    scans: List[Observations],
+    survey: Dict[int, Tuple[float, float]],
+    *,
+    off: float = 0.1,
+    min_frames: int = 5,
+) -> SurveyAgreement: ...
 def single_observation(
     calculus: Calculus,
     points: npt.ArrayLike,

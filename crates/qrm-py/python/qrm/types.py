@@ -46,6 +46,7 @@ __all__ = [
     "QlinkTableRow",
     "RobotAblation",
     "Schedule",
+    "SurveyAgreement",
     "TaskDraws",
     "TransitionRecord",
     "TrialMetrics",
@@ -66,6 +67,15 @@ class Observations(TypedDict):
     """positions (m), shape (n, 2)"""
     cov: npt.NDArray[np.float64]
     """covariances [cxx, cxy, cyy] (m²), shape (n, 3)"""
+
+
+class SurveyAgreement(TypedDict):
+    """Landmark pairs the survey disagrees with the frames on (`survey_agreement`)."""
+
+    pairs_seen: int
+    """pairs of surveyed landmarks seen together in at least `min_frames` scans"""
+    off: List[Tuple[int, int, float, int]]
+    """(a, b, median of distance seen − surveyed (m), frames), a < b, in order"""
 
 
 class _FrameBase(TypedDict):
