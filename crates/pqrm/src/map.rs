@@ -179,8 +179,6 @@ pub struct Pqrm {
 #[derive(Default)]
 struct StepBuffers {
     counts: StepCounts,
-    /// The last step's table of logarithms ([`Evidence`]): steps of one sample count share it.
-    log_table: Option<LogTable>,
     found: Vec<Option<usize>>,
     slots: Vec<usize>,
     fresh: Vec<bool>,
@@ -369,25 +367,7 @@ impl Pqrm {
                 counts.n_states()
             )));
         }
-        let evidence = Evidence::new(
-            self.config.floor,
-            self.config.temper,
-            counts,
-            buffers.log_table.take(),
-        );
-        let report = self.fold_with(counts, &evidence, buffers);
-        buffers.log_table = evidence.table;
-        report
-    }
-
-    /// [`Pqrm::fold_counts`] with the step's evidence.
-    fn fold_with(
-        &mut self,
-        counts: &StepCounts,
-        evidence: &Evidence,
-        buffers: &mut StepBuffers,
-    ) -> Result<UpdateReport> {
-        let q = self.calculus.n_states();
+        let evidence = Evidence::new(self.config.floor, self.config.temper, counts);
         let mut report = UpdateReport {
             observed: counts.len(),
             ..UpdateReport::default()
@@ -835,62 +815,37 @@ fn is_log_distribution(row: &[f32]) -> bool {
 struct Evidence {
     floor: f64,
     temper: f64,
-    table: Option<LogTable>,
-}
-
-/// `ln((c + α)/(total + αQ))` for `c = 0..=total`, and what it was computed for.
-struct LogTable {
-    total: u64,
-    floor: f64,
-    q: usize,
-    values: Vec<f64>,
+    /// The total the table is for, and `ln((c + α)/total)` for `c = 0..=total`.
+    table: Option<(u64, Vec<f64>)>,
 }
 
 impl Evidence {
-    /// `cached`: the last step's table, reused when it is for the same total, floor and
-    /// number of states (its 1,001 logarithms were 8 % of a 10-landmark step's filter).
-    fn new(floor: f64, temper: f64, counts: &StepCounts, cached: Option<LogTable>) -> Self {
+    fn new(floor: f64, temper: f64, counts: &StepCounts) -> Self {
         let q = counts.n_states();
-        let wanted = (!counts.is_empty())
+        let table = (!counts.is_empty())
             .then(|| counts.counts(0).iter().map(|&c| u64::from(c)).sum::<u64>())
-            .filter(|&total| total as usize <= counts.len() * q);
-        if let (Some(total), Some(t)) = (wanted, &cached)
-            && t.total == total
-            && t.floor.to_bits() == floor.to_bits()
-            && t.q == q
-        {
-            return Self {
-                floor,
-                temper,
-                table: cached,
-            };
-        }
-        let table = wanted.map(|total| {
-            // `log_likelihood`'s entry for a bin of `c` out of `total`, term for term: its
-            // sum of the counts is exact (integers below 2^53), so one logarithm per
-            // count replaces a whole histogram's (the profile's top after the kernel)
-            let floor = if floor.is_finite() && floor > 0.0 {
-                floor
-            } else {
-                0.0
-            };
-            let sum = total as f64 + floor * q.max(1) as f64;
-            let values = (0..=total)
-                .map(|c| {
-                    if sum <= 0.0 {
-                        -(q.max(1) as f64).ln()
-                    } else {
-                        ((c as f64 + floor) / sum).ln()
-                    }
-                })
-                .collect();
-            LogTable {
-                total,
-                floor,
-                q,
-                values,
-            }
-        });
+            .filter(|&total| total as usize <= counts.len() * q)
+            .map(|total| {
+                // `log_likelihood`'s entry for a bin of `c` out of `total`, term for term: its
+                // sum of the counts is exact (integers below 2^53), so one logarithm per
+                // count replaces a whole histogram's (the profile's top after the kernel)
+                let floor = if floor.is_finite() && floor > 0.0 {
+                    floor
+                } else {
+                    0.0
+                };
+                let sum = total as f64 + floor * q.max(1) as f64;
+                let values = (0..=total)
+                    .map(|c| {
+                        if sum <= 0.0 {
+                            -(q.max(1) as f64).ln()
+                        } else {
+                            ((c as f64 + floor) / sum).ln()
+                        }
+                    })
+                    .collect();
+                (total, values)
+            });
         Self {
             floor,
             temper,
@@ -901,9 +856,9 @@ impl Evidence {
     fn fill(&self, counts: &[u32], out: &mut [f64]) {
         let total: u64 = counts.iter().map(|&c| u64::from(c)).sum();
         match &self.table {
-            Some(t) if t.total == total => {
+            Some((t, values)) if *t == total => {
                 for (o, &c) in out.iter_mut().zip(counts) {
-                    *o = t.values[c as usize];
+                    *o = values[c as usize];
                 }
             }
             _ => out.copy_from_slice(&log_likelihood(counts, self.floor)),
@@ -968,7 +923,7 @@ fn posterior_stored(prior: Option<&[f32]>, ll: &[f64], sums: &mut [f64], out: &m
 /// The largest of `values` and whether one is NaN or `+inf` (then the largest means
 /// nothing). Four running maxima by comparison, not `f64::max`: its NaN rule made one chain of
 /// four dependent operations per value, half of the filter's time
-/// (`examples/step_timing.rs`: the filter 0.059 → 0.040 ms a step); NaN is caught by the flag
+/// (`examples/step_timing.rs`: the filter 0.060 → 0.043 ms a step); NaN is caught by the flag
 /// instead.
 #[inline]
 fn max_or_special(values: &[f64]) -> (f64, bool) {
@@ -1239,7 +1194,7 @@ mod tests {
                     for id in 0..=total {
                         counts.push(LandmarkSet::new(1, 2, 3 + id), &first).unwrap();
                     }
-                    let evidence = Evidence::new(floor, 1.0, &counts, None);
+                    let evidence = Evidence::new(floor, 1.0, &counts);
                     assert!(evidence.table.is_some(), "the table path is tested");
                     let mut out = vec![0.0; q];
                     // every split of the total between two states, and the total in one
