@@ -86,9 +86,25 @@ def test_the_classification_baselines_give_qrm_s_state(classify_bench) -> None: 
 def test_the_classification_ratio_is_against_the_strongest_baseline_of_its_layout(classify_bench) -> None:  # type: ignore[no-untyped-def]
     best = {name: {"wall": w, "cpu": w} for name, w in [
         ("numpy-naive", 9.0), ("numpy-lut", 3.0), ("numba", 2.0), ("numba columns", 1.5),
-        ("qrm rows, 1 thread", 1.0), ("qrm columns, 1 thread", 1.0), ("memory read (bound)", 0.1)]}
+        ("qrm rows, 1 thread", 1.0), ("qrm columns, 1 thread", 1.0), (classify_bench.BOUND, 0.1)]}
     assert classify_bench.strongest(best, columns=False) == "numba"
     assert classify_bench.strongest(best, columns=True) == "numba columns"
     text = classify_bench.report(1, 1_000_000, best)
     assert "qrm rows against the strongest baseline of its layout (numba): 2.00x" in text
     assert "qrm columns against the strongest baseline of its layout (numba columns): 1.50x" in text
+
+
+def test_the_goal_is_judged_against_the_read_and_write_bound(classify_bench) -> None:  # type: ignore[no-untyped-def]
+    """1.5x numba (2.0 s) needs 1.33 s on rows, 1.5x numba columns (1.5 s) 1.0 s; a kernel
+    cannot beat the time of reading the rows and writing the states."""
+    def verdict(bound: float) -> str:
+        best = {name: {"wall": w, "cpu": w} for name, w in [
+            ("numba", 2.0), ("numba columns", 1.5), ("qrm rows, 1 thread", 1.0),
+            ("qrm columns, 1 thread", 1.0), (classify_bench.BOUND, bound)]}
+        return classify_bench.reachable(best, 1_000_000)
+
+    assert "needs (rows 1333.33 ns, columns 1000.00 ns)" in verdict(0.5)
+    assert "above the bound by 2.00x at the tightest" in verdict(0.5)
+    assert "below the bound on columns: no kernel" in verdict(1.2)
+    assert "below the bound on rows and columns: no kernel" in verdict(1.4)
+    assert "below" not in verdict(0.999)
