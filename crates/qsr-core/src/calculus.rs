@@ -639,7 +639,8 @@ use with_wide_vectors;
 /// the partition's shape, a block of states at a time.
 #[inline(always)]
 fn rows_fused(c: &ConstraintPartition, triplets: &[[f64; 6]], out: &mut [StateId]) -> Result<()> {
-    let mut states = [0u16; BLOCK];
+    // one buffer for every block: filled whole before each use
+    let mut cols = [[0.0f64; BLOCK]; 6];
     for (bi, (rows, outs)) in triplets
         .chunks(BLOCK)
         .zip(out.chunks_mut(BLOCK))
@@ -652,7 +653,6 @@ fn rows_fused(c: &ConstraintPartition, triplets: &[[f64; 6]], out: &mut [StateId
                 // moved into six columns first: the fused loop then loads each coordinate of
                 // eight (four) rows as one vector, where reading the rows in place gathered
                 // them one 48-byte stride at a time
-                let mut cols = [[0.0f64; BLOCK]; 6];
                 for (i, row) in full.iter().enumerate() {
                     for (col, v) in cols.iter_mut().zip(row) {
                         col[i] = *v;
@@ -661,16 +661,14 @@ fn rows_fused(c: &ConstraintPartition, triplets: &[[f64; 6]], out: &mut [StateId
                 c.classify_points(
                     BLOCK,
                     |i| normalise_row(&std::array::from_fn(|k| cols[k][i])),
-                    &mut states,
+                    outs,
+                    StateId,
                 )
             }
-            Err(_) => c.classify_points(n, |i| normalise_row(&rows[i]), &mut states[..n]),
+            Err(_) => c.classify_points(n, |i| normalise_row(&rows[i]), outs, StateId),
         };
         if !valid {
             return Err(first_invalid(rows, bi * BLOCK));
-        }
-        for (o, s) in outs.iter_mut().zip(&states[..n]) {
-            *o = StateId(*s);
         }
     }
     Ok(())
@@ -679,7 +677,6 @@ fn rows_fused(c: &ConstraintPartition, triplets: &[[f64; 6]], out: &mut [StateId
 /// [`Calculus::classify_columns`] for a constraint partition, as [`rows_fused`].
 #[inline(always)]
 fn columns_fused(c: &ConstraintPartition, cols: [&[f64]; 6], out: &mut [StateId]) -> Result<()> {
-    let mut states = [0u16; BLOCK];
     let row = |cols: &[&[f64]; 6], i: usize| std::array::from_fn(|k| cols[k][i]);
     for (bi, outs) in out.chunks_mut(BLOCK).enumerate() {
         let (start, n) = (bi * BLOCK, outs.len());
@@ -690,19 +687,17 @@ fn columns_fused(c: &ConstraintPartition, cols: [&[f64]; 6], out: &mut [StateId]
             c.classify_points(
                 BLOCK,
                 |i| normalise_row(&std::array::from_fn(|k| f[k][i])),
-                &mut states,
+                outs,
+                StateId,
             )
         } else {
-            c.classify_points(n, |i| normalise_row(&row(&block, i)), &mut states[..n])
+            c.classify_points(n, |i| normalise_row(&row(&block, i)), outs, StateId)
         };
         if !valid {
             let i = (0..n)
                 .find(|&i| classify_rows_one_invalid(&row(&block, i)))
                 .unwrap_or(0);
             return Err(row_error(start + i, &row(&block, i)));
-        }
-        for (o, s) in outs.iter_mut().zip(&states[..n]) {
-            *o = StateId(*s);
         }
     }
     Ok(())

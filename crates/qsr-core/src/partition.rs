@@ -110,22 +110,25 @@ impl ConstraintPartition {
         let n = xs.len().min(ys.len()).min(out.len());
         let (xs, ys) = (&xs[..n], &ys[..n]);
         if self.fused {
-            self.classify_points(n, |i| (xs[i], ys[i], true), out);
+            self.classify_points(n, |i| (xs[i], ys[i], true), out, |s| s);
             return;
         }
         self.classify_block_general(xs, ys, &mut out[..n]);
     }
 
-    /// States of `n` points given by `point(i) = (x, y, valid)` into `out[..n]`, and whether
-    /// every point was valid: through the kernel of this partition's shape when it has one
-    /// (each point in registers from `point` to its sign vector: a caller that normalises in
-    /// `point` fuses the two), else the general block loop.
+    /// States of `n` points given by `point(i) = (x, y, valid)` into `out[..n]` (each state
+    /// index as `state(index)`: a caller's own output type, written in place rather than
+    /// copied from a buffer block by block), and whether every point was valid: through the
+    /// kernel of this partition's shape when it has one (each point in registers from `point`
+    /// to its sign vector: a caller that normalises in `point` fuses the two), else the
+    /// general block loop.
     #[inline(always)]
-    pub(crate) fn classify_points(
+    pub(crate) fn classify_points<O>(
         &self,
         n: usize,
         point: impl Fn(usize) -> (f64, f64, bool),
-        out: &mut [u16],
+        out: &mut [O],
+        state: impl Fn(u16) -> O,
     ) -> bool {
         let mut v = [0u32; BLOCK];
         let mut valid = true;
@@ -150,12 +153,16 @@ impl ConstraintPartition {
                         valid &= ok;
                     }
                     let m = end - start;
-                    self.classify_block_general(&xs[..m], &ys[..m], &mut out[start..end]);
+                    let mut states = [0u16; BLOCK];
+                    self.classify_block_general(&xs[..m], &ys[..m], &mut states[..m]);
+                    for (o, s) in out[start..end].iter_mut().zip(&states[..m]) {
+                        *o = state(*s);
+                    }
                     continue;
                 }
             }
             for (o, vi) in out[start..end].iter_mut().zip(bv.iter()) {
-                *o = self.table[*vi as usize & mask];
+                *o = state(self.table[*vi as usize & mask]);
             }
         }
         valid
