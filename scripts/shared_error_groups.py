@@ -10,7 +10,13 @@ bins of ≥ 30 sets, log loss):
 - eq. 2.10 (τ = 1);
 - the shared model at constant N (τ = 1/√(n(1 + n/N)), `crates/pqrm/src/evidence.rs`);
 - grouped: τ = √n_eff / n with n_eff = Σ_g 1/(ρ + (1 − ρ)/n_g), n_g the set's frames in group
-  g — frames within a group share a fraction ρ of their error, groups none.
+  g — frames within a group share a fraction ρ of their error, groups none;
+- with `--two-level`: each group's frames capped as the shared model caps a set's
+  (n_g/(1 + n_g/N_r)), the groups added, and the sum capped again by an error every group
+  shares (n_eff = 1/(1/Σ_g … + 1/N_c)), over a grid of N_r and N_c.
+
+`--gate` reads the recording as `qrm map` does (noise fitted, gross outliers gated); without it
+the fitted noise is used and every detection kept (the reading of 2026-11-28).
 
     python3 scripts/shared_error_groups.py --qrm target/release/qrm ../shared/data/mrclam-dataset2 \\
         ../shared/data/mrclam-dataset5 ../shared/data/mrclam-dataset7
@@ -56,9 +62,12 @@ def fitted_noise(qrm_bin: str, recording: pathlib.Path):
     return fit["sigma_range"], fit["sigma_bearing"]
 
 
-def grouped_sums(recording: pathlib.Path, calculus: str, block: float, noise):
-    frames, truth = qrm.read_observations(str(recording), "mrclam", sigma_range=noise[0],
-                                          sigma_bearing=noise[1])
+def grouped_sums(recording: pathlib.Path, calculus: str, block: float, noise, gate: bool):
+    if gate:
+        frames, truth = qrm.read_observations(str(recording), "mrclam", noise="auto")
+    else:
+        frames, truth = qrm.read_observations(str(recording), "mrclam", sigma_range=noise[0],
+                                              sigma_bearing=noise[1])
     maps = {}
     for f in frames:
         if len(f["ids"]) < 3:
@@ -88,12 +97,15 @@ def main() -> None:
     ap.add_argument("--qrm", default="target/release/qrm")
     ap.add_argument("--calculus", default="edc")
     ap.add_argument("--block", type=float, default=0.0, help="time block (s); 0: one group per robot")
+    ap.add_argument("--gate", action="store_true", help="read as qrm map does: gross outliers gated")
+    ap.add_argument("--two-level", action="store_true", help="also the two-level readings (N_r, N_c)")
     ap.add_argument("recordings", nargs="+", type=pathlib.Path)
     a = ap.parse_args()
     print("| recording | reading | error | ECE | largest gap | log loss |")
     print("|---|---|---|---|---|---|")
     for rec in a.recordings:
-        sums, groups, truth = grouped_sums(rec, a.calculus, a.block, fitted_noise(a.qrm, rec))
+        noise = None if a.gate else fitted_noise(a.qrm, rec)
+        sums, groups, truth = grouped_sums(rec, a.calculus, a.block, noise, a.gate)
         n = np.array([sum(g) for g in groups], dtype=float)
 
         def read(tau: np.ndarray) -> np.ndarray:
@@ -107,6 +119,12 @@ def main() -> None:
         for rho in (0.1, 0.5, 0.9):
             n_eff = np.array([sum(1 / (rho + (1 - rho) / k) for k in g) for g in groups])
             readings.append((f"grouped ρ = {rho}", np.sqrt(n_eff) / n))
+        if a.two_level:
+            for n_r in (1, 2, 4, 8):
+                pooled = np.array([sum(k / (1 + k / n_r) for k in g) for g in groups])
+                for n_c in (2, 4, 8, 16, 32, 64, np.inf):
+                    n_eff = 1 / (1 / pooled + 1 / n_c)
+                    readings.append((f"two-level N_r = {n_r}, N_c = {n_c:g}", np.sqrt(n_eff) / n))
         for name, tau in readings:
             err, ece, gap, ll = score(read(tau), truth)
             print(f"| {rec.name} | {name} | {err:.3f} | {ece:.3f} | {gap:.3f} | {ll:.3f} |")
