@@ -15,6 +15,7 @@ use crate::permute::{Permutation, PermutationTable};
 use crate::sampled::{DERIVED_SEED, Sampled};
 use crate::spec::{CalculusSpec, OutsideRule, RasterSpec, format_vector, pattern_table};
 pub use crate::state::StateId;
+use crate::state::StateIndex;
 
 /// Probe points used to validate a constraint spec (sign vectors that occur in the plane).
 const VALIDATION_PROBES: usize = 200_000;
@@ -292,6 +293,30 @@ impl Calculus {
     /// non-finite or degenerate row is reported with its index and nothing after it is
     /// guaranteed written.
     pub fn classify_triplets(&self, triplets: &[[f64; 6]], out: &mut [StateId]) -> Result<()> {
+        self.classify_triplets_as(triplets, out)
+    }
+
+    /// [`Calculus::classify_triplets`] into any [`StateIndex`] type: the kernel writes each
+    /// state in place, so a caller that wants integers (a NumPy int64 array) needs no buffer
+    /// of ids and no second pass.
+    ///
+    /// ```
+    /// use qsr_core::Calculus;
+    /// let lr = Calculus::builtin("left-right")?;
+    /// let mut out = [0i64; 2];
+    /// lr.classify_triplets_as(&[[0.0, 0.0, 0.0, 1.0, -1.0, 0.5], [0.0, 0.0, 0.0, 1.0, 1.0, 0.5]], &mut out)?;
+    /// assert_eq!(out[0], i64::from(lr.state("left")?.0));
+    /// assert_eq!(out[1], i64::from(lr.state("right")?.0));
+    /// # Ok::<(), qsr_core::QsrError>(())
+    /// ```
+    ///
+    /// # Errors
+    /// As [`Calculus::classify_triplets`].
+    pub fn classify_triplets_as<O: StateIndex>(
+        &self,
+        triplets: &[[f64; 6]],
+        out: &mut [O],
+    ) -> Result<()> {
         self.expect_frame(FrameKind::Ternary)?;
         if triplets.len() != out.len() {
             return Err(QsrError::Arity(format!(
@@ -331,6 +356,21 @@ impl Calculus {
         c: (&[f64], &[f64]),
         out: &mut [StateId],
     ) -> Result<()> {
+        self.classify_columns_as(a, b, c, out)
+    }
+
+    /// [`Calculus::classify_columns`] into any [`StateIndex`] type, written in place (as
+    /// [`Calculus::classify_triplets_as`]).
+    ///
+    /// # Errors
+    /// As [`Calculus::classify_triplets`].
+    pub fn classify_columns_as<O: StateIndex>(
+        &self,
+        a: (&[f64], &[f64]),
+        b: (&[f64], &[f64]),
+        c: (&[f64], &[f64]),
+        out: &mut [O],
+    ) -> Result<()> {
         self.expect_frame(FrameKind::Ternary)?;
         let n = out.len();
         let lens = [
@@ -348,7 +388,7 @@ impl Calculus {
         }
         if let Partition::Constraints(p) = &self.partition {
             let cols = [a.0, a.1, b.0, b.1, c.0, c.1];
-            return with_wide_vectors!(columns_fused(p: &ConstraintPartition, cols: [&[f64]; 6], out: &mut [StateId]) -> Result<()>);
+            return with_wide_vectors!(columns_fused::<O: StateIndex>(p: &ConstraintPartition, cols: [&[f64]; 6], out: &mut [O]) -> Result<()>);
         }
         let mut xs = [0.0f64; BLOCK];
         let mut ys = [0.0f64; BLOCK];
@@ -392,7 +432,7 @@ impl Calculus {
                 }
             }
             for (o, s) in out[start..end].iter_mut().zip(&states[..m]) {
-                *o = StateId(*s);
+                *o = O::from_state(StateId(*s));
             }
         }
         Ok(())
@@ -562,9 +602,13 @@ impl Calculus {
 
 /// Classifies rows block by block: normalise [`BLOCK`] triplets (vectorisable: no branch
 /// but the validity check), then hand the block to the partition.
-fn classify_rows(partition: &Partition, triplets: &[[f64; 6]], out: &mut [StateId]) -> Result<()> {
+fn classify_rows<O: StateIndex>(
+    partition: &Partition,
+    triplets: &[[f64; 6]],
+    out: &mut [O],
+) -> Result<()> {
     if let Partition::Constraints(c) = partition {
-        return with_wide_vectors!(rows_fused(c: &ConstraintPartition, triplets: &[[f64; 6]], out: &mut [StateId]) -> Result<()>);
+        return with_wide_vectors!(rows_fused::<O: StateIndex>(c: &ConstraintPartition, triplets: &[[f64; 6]], out: &mut [O]) -> Result<()>);
     }
     let mut xs = [0.0f64; BLOCK];
     let mut ys = [0.0f64; BLOCK];
@@ -593,7 +637,7 @@ fn classify_rows(partition: &Partition, triplets: &[[f64; 6]], out: &mut [StateI
             }
         }
         for (o, s) in outs.iter_mut().zip(&states[..n]) {
-            *o = StateId(*s);
+            *o = O::from_state(StateId(*s));
         }
     }
     Ok(())
@@ -604,16 +648,16 @@ fn classify_rows(partition: &Partition, triplets: &[[f64; 6]], out: &mut [StateI
 /// shape keeps a point in registers, and wider registers take four or eight at once. The
 /// arithmetic is the same IEEE operations in the same order on every path.
 macro_rules! with_wide_vectors {
-    ($f:ident($($arg:ident: $ty:ty),*) -> $ret:ty) => {{
+    ($f:ident $(::<$g:ident: $bound:path>)? ($($arg:ident: $ty:ty),*) -> $ret:ty) => {{
         #[cfg(target_arch = "x86_64")]
         {
             #[target_feature(enable = "avx512f,avx512dq,avx512vl,avx512bw")]
-            fn avx512($($arg: $ty),*) -> $ret {
-                $f($($arg),*)
+            fn avx512 $(<$g: $bound>)? ($($arg: $ty),*) -> $ret {
+                $f $(::<$g>)? ($($arg),*)
             }
             #[target_feature(enable = "avx2")]
-            fn avx2($($arg: $ty),*) -> $ret {
-                $f($($arg),*)
+            fn avx2 $(<$g: $bound>)? ($($arg: $ty),*) -> $ret {
+                $f $(::<$g>)? ($($arg),*)
             }
             if std::arch::is_x86_feature_detected!("avx512f")
                 && std::arch::is_x86_feature_detected!("avx512dq")
@@ -622,15 +666,15 @@ macro_rules! with_wide_vectors {
             {
                 #[allow(unsafe_code)]
                 // SAFETY: `avx512` only requires these AVX-512 parts, just detected.
-                return unsafe { avx512($($arg),*) };
+                return unsafe { avx512 $(::<$g>)? ($($arg),*) };
             }
             if std::arch::is_x86_feature_detected!("avx2") {
                 #[allow(unsafe_code)]
                 // SAFETY: `avx2` only requires AVX2, just detected.
-                return unsafe { avx2($($arg),*) };
+                return unsafe { avx2 $(::<$g>)? ($($arg),*) };
             }
         }
-        $f($($arg),*)
+        $f $(::<$g>)? ($($arg),*)
     }};
 }
 use with_wide_vectors;
@@ -638,7 +682,11 @@ use with_wide_vectors;
 /// [`classify_rows`] for a constraint partition: the normalisation fused into the kernel of
 /// the partition's shape, a block of states at a time.
 #[inline(always)]
-fn rows_fused(c: &ConstraintPartition, triplets: &[[f64; 6]], out: &mut [StateId]) -> Result<()> {
+fn rows_fused<O: StateIndex>(
+    c: &ConstraintPartition,
+    triplets: &[[f64; 6]],
+    out: &mut [O],
+) -> Result<()> {
     // one buffer for every block: filled whole before each use
     let mut cols = [[0.0f64; BLOCK]; 6];
     for (bi, (rows, outs)) in triplets
@@ -662,10 +710,15 @@ fn rows_fused(c: &ConstraintPartition, triplets: &[[f64; 6]], out: &mut [StateId
                     BLOCK,
                     |i| normalise_row(&std::array::from_fn(|k| cols[k][i])),
                     outs,
-                    StateId,
+                    |s| O::from_state(StateId(s)),
                 )
             }
-            Err(_) => c.classify_points(n, |i| normalise_row(&rows[i]), outs, StateId),
+            Err(_) => c.classify_points(
+                n,
+                |i| normalise_row(&rows[i]),
+                outs,
+                |s| O::from_state(StateId(s)),
+            ),
         };
         if !valid {
             return Err(first_invalid(rows, bi * BLOCK));
@@ -676,7 +729,11 @@ fn rows_fused(c: &ConstraintPartition, triplets: &[[f64; 6]], out: &mut [StateId
 
 /// [`Calculus::classify_columns`] for a constraint partition, as [`rows_fused`].
 #[inline(always)]
-fn columns_fused(c: &ConstraintPartition, cols: [&[f64]; 6], out: &mut [StateId]) -> Result<()> {
+fn columns_fused<O: StateIndex>(
+    c: &ConstraintPartition,
+    cols: [&[f64]; 6],
+    out: &mut [O],
+) -> Result<()> {
     let row = |cols: &[&[f64]; 6], i: usize| std::array::from_fn(|k| cols[k][i]);
     for (bi, outs) in out.chunks_mut(BLOCK).enumerate() {
         let (start, n) = (bi * BLOCK, outs.len());
@@ -688,10 +745,15 @@ fn columns_fused(c: &ConstraintPartition, cols: [&[f64]; 6], out: &mut [StateId]
                 BLOCK,
                 |i| normalise_row(&std::array::from_fn(|k| f[k][i])),
                 outs,
-                StateId,
+                |s| O::from_state(StateId(s)),
             )
         } else {
-            c.classify_points(n, |i| normalise_row(&row(&block, i)), outs, StateId)
+            c.classify_points(
+                n,
+                |i| normalise_row(&row(&block, i)),
+                outs,
+                |s| O::from_state(StateId(s)),
+            )
         };
         if !valid {
             let i = (0..n)

@@ -111,6 +111,7 @@ pub use spec::{
     CalculusSpec, ConstraintSpec, MAX_CONSTRAINTS, MAX_FEATURE_EXTENT, MIN_FEATURE_SIZE,
     OutsideRule, RasterSpec, Shape, Side, StateSpec,
 };
+pub use state::StateIndex;
 
 /// Re-exported so users need not depend on nalgebra to call the API.
 pub use nalgebra::Point2;

@@ -236,7 +236,7 @@ impl ConstraintPartition {
 }
 
 /// Points per block in [`ConstraintPartition::classify_block`].
-pub(crate) const BLOCK: usize = 32;
+pub(crate) const BLOCK: usize = 128;
 
 /// Relative distance below which a point's side of a curve is decided by rounding.
 pub const ROUNDING_MARGIN: f64 = 1e-10;

@@ -162,12 +162,27 @@ proptest! {
             }
         let edc = Calculus::builtin("edc").unwrap();
         let raster = edc.rasterise([-3.0, 3.0, -2.0, 3.0], 60, 50, qsr_core::OutsideRule::Clamp).unwrap();
+        let cols: Vec<Vec<f64>> = (0..6).map(|k| rows.iter().map(|r| r[k]).collect()).collect();
         for calc in [&edc, &raster] {
             let mut out = vec![qsr_core::StateId(0); rows.len()];
             let batch = calc.classify_triplets(&rows, &mut out);
             let scalar: Result<Vec<_>, _> = rows.iter().map(|r| calc.classify_row(r)).collect();
+            // the same states written as integers by the kernel itself (`StateIndex`), by rows
+            // and by columns, and the same refusal
+            let mut wide = vec![-1i64; rows.len()];
+            let by_rows = calc.classify_triplets_as(&rows, &mut wide);
+            let mut wide_cols = vec![usize::MAX; rows.len()];
+            let by_cols = calc.classify_columns_as(
+                (&cols[0], &cols[1]), (&cols[2], &cols[3]), (&cols[4], &cols[5]), &mut wide_cols,
+            );
+            prop_assert_eq!(by_rows.is_ok(), scalar.is_ok());
+            prop_assert_eq!(by_cols.is_ok(), scalar.is_ok());
             match (batch, scalar) {
-                (Ok(()), Ok(s)) => prop_assert_eq!(out, s),
+                (Ok(()), Ok(s)) => {
+                    prop_assert_eq!(&wide, &s.iter().map(|x| i64::from(x.0)).collect::<Vec<_>>());
+                    prop_assert_eq!(&wide_cols, &s.iter().map(|x| x.index()).collect::<Vec<_>>());
+                    prop_assert_eq!(out, s);
+                }
                 (Err(_), Err(_)) => {}
                 (b, s) => prop_assert!(false, "batch {:?} vs scalar {:?}", b, s.map(|_| ())),
             }
