@@ -20,7 +20,8 @@
 //! ## Naming rule for operations
 //! - `classify_*` maps configurations to states (`classify_triplet`, `classify_oriented`,
 //!   `classify_extended`, `classify_row`, `classify_triplets` for batches,
-//!   `classify_normalised` when the point is already in the frame).
+//!   `classify_normalised` when the point is already in the frame); a `_as` suffix writes
+//!   the states as the caller's integer type ([`StateIndex`]) in place.
 //! - Nouns return derived structure, computed on first use and cached:
 //!   [`Calculus::neighbours`], [`Calculus::permutation`], [`Calculus::compose_table`].
 //! - `merge_*` goes from a finer calculus to a coarser one ([`Calculus::merge_map`],
