@@ -11,7 +11,7 @@ Baselines, all checked to give qrm's labels on every triplet before any is timed
 - `numba`: the same rule as a plain loop under `@njit` (one thread), and `numba-parallel`
   (`parallel=True`, `prange`, all cores).
 The bound: a numba loop that reads every input value once and computes and writes nothing,
-on as many threads as the row — no kernel can classify faster — and whether 1.5x the
+on the thread count being measured — no kernel can classify faster — and whether 1.5x the
 strongest baseline (issue 37's goal) lies above it.
 qrm is timed through the wheel (`Calculus.classify` with `out=`, rows; `classify_columns`,
 six contiguous columns) in the same process as the baselines of its thread count: one process

@@ -710,15 +710,9 @@ fn rows_fused<O: StateIndex>(
                     BLOCK,
                     |i| normalise_row(&std::array::from_fn(|k| cols[k][i])),
                     outs,
-                    |s| O::from_state(StateId(s)),
                 )
             }
-            Err(_) => c.classify_points(
-                n,
-                |i| normalise_row(&rows[i]),
-                outs,
-                |s| O::from_state(StateId(s)),
-            ),
+            Err(_) => c.classify_points(n, |i| normalise_row(&rows[i]), outs),
         };
         if !valid {
             return Err(first_invalid(rows, bi * BLOCK));
@@ -745,15 +739,9 @@ fn columns_fused<O: StateIndex>(
                 BLOCK,
                 |i| normalise_row(&std::array::from_fn(|k| f[k][i])),
                 outs,
-                |s| O::from_state(StateId(s)),
             )
         } else {
-            c.classify_points(
-                n,
-                |i| normalise_row(&row(&block, i)),
-                outs,
-                |s| O::from_state(StateId(s)),
-            )
+            c.classify_points(n, |i| normalise_row(&row(&block, i)), outs)
         };
         if !valid {
             let i = (0..n)

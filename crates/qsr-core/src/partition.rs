@@ -11,6 +11,7 @@ use nalgebra::Point2;
 
 use crate::fused::Grouped;
 use crate::spec::{OutsideRule, RasterSpec, Shape, Side};
+use crate::state::{StateId, StateIndex};
 
 /// Sign-vector classification by lines and circles.
 #[derive(Debug, Clone)]
@@ -110,25 +111,23 @@ impl ConstraintPartition {
         let n = xs.len().min(ys.len()).min(out.len());
         let (xs, ys) = (&xs[..n], &ys[..n]);
         if self.fused {
-            self.classify_points(n, |i| (xs[i], ys[i], true), out, |s| s);
+            self.classify_points(n, |i| (xs[i], ys[i], true), out);
             return;
         }
         self.classify_block_general(xs, ys, &mut out[..n]);
     }
 
-    /// States of `n` points given by `point(i) = (x, y, valid)` into `out[..n]` (each state
-    /// index as `state(index)`: a caller's own output type, written in place rather than
-    /// copied from a buffer block by block), and whether every point was valid: through the
-    /// kernel of this partition's shape when it has one (each point in registers from `point`
-    /// to its sign vector: a caller that normalises in `point` fuses the two), else the
-    /// general block loop.
+    /// States of `n` points given by `point(i) = (x, y, valid)` into `out[..n]` (in the
+    /// caller's [`StateIndex`] type, written in place rather than copied from a buffer block
+    /// by block), and whether every point was valid: through the kernel of this partition's
+    /// shape when it has one (each point in registers from `point` to its sign vector: a
+    /// caller that normalises in `point` fuses the two), else the general block loop.
     #[inline(always)]
-    pub(crate) fn classify_points<O>(
+    pub(crate) fn classify_points<O: StateIndex>(
         &self,
         n: usize,
         point: impl Fn(usize) -> (f64, f64, bool),
         out: &mut [O],
-        state: impl Fn(u16) -> O,
     ) -> bool {
         let mut v = [0u32; BLOCK];
         let mut valid = true;
@@ -156,13 +155,13 @@ impl ConstraintPartition {
                     let mut states = [0u16; BLOCK];
                     self.classify_block_general(&xs[..m], &ys[..m], &mut states[..m]);
                     for (o, s) in out[start..end].iter_mut().zip(&states[..m]) {
-                        *o = state(*s);
+                        *o = O::from_state(StateId(*s));
                     }
                     continue;
                 }
             }
             for (o, vi) in out[start..end].iter_mut().zip(bv.iter()) {
-                *o = state(self.table[*vi as usize & mask]);
+                *o = O::from_state(StateId(self.table[*vi as usize & mask]));
             }
         }
         valid
