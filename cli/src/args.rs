@@ -189,12 +189,14 @@ pub struct RealArgs {
     /// see `pqrm::temper`). The report compares τ = 1 with the chosen τ either way.
     #[arg(long, default_value = "1")]
     pub temper: String,
-    /// How the frames of one landmark set combine (`pqrm::evidence`): `shared` (the default:
-    /// frames share the true geometry and an error — landmark extent, mounting, a robot's bias
-    /// — as large as the noise of N = 4 independent frames, N chosen by leaving one MRCLAM
-    /// recording out; `shared:N` for another N, `shared:inf` for no shared offset) or
-    /// `independent`, the thesis's eq. 2.10 (probabilities overconfident on real recordings).
-    #[arg(long, default_value = "shared")]
+    /// How the frames of one landmark set combine (`pqrm::evidence`): `layout` (the default:
+    /// every frame aligned into one layout of the landmarks, a set's belief read from it and
+    /// from the error the frames share beyond it, measured on the recording itself —
+    /// `pqrm::layout`, calibrated on every MRCLAM recording tried), `shared` (the filter's
+    /// frames share the geometry and an error as large as N = 4 independent frames'; `shared:N`,
+    /// `shared:inf`; a map that can take more frames and be merged) or `independent`, the
+    /// thesis's eq. 2.10 (probabilities overconfident on real recordings).
+    #[arg(long, default_value = "layout")]
     pub evidence: String,
     /// Seed.
     #[arg(long, default_value_t = 0)]
@@ -275,12 +277,14 @@ pub struct MapArgs {
     /// truth needed; the choice goes into summary.json).
     #[arg(long, default_value = "1")]
     pub temper: String,
-    /// How the frames of one landmark set combine (`pqrm::evidence`): `shared` (the default:
-    /// frames share the true geometry and an error — landmark extent, mounting, a robot's bias
-    /// — as large as the noise of N = 4 independent frames, N chosen by leaving one MRCLAM
-    /// recording out; `shared:N` for another N, `shared:inf` for no shared offset) or
-    /// `independent`, the thesis's eq. 2.10 (probabilities overconfident on real recordings).
-    #[arg(long, default_value = "shared")]
+    /// How the frames of one landmark set combine (`pqrm::evidence`): `layout` (the default:
+    /// every frame aligned into one layout of the landmarks, a set's belief read from it and
+    /// from the error the frames share beyond it, measured on the recording itself —
+    /// `pqrm::layout`, calibrated on every MRCLAM recording tried), `shared` (the filter's
+    /// frames share the geometry and an error as large as N = 4 independent frames'; `shared:N`,
+    /// `shared:inf`; a map that can take more frames and be merged) or `independent`, the
+    /// thesis's eq. 2.10 (probabilities overconfident on real recordings).
+    #[arg(long, default_value = "layout")]
     pub evidence: String,
     /// Map only these robots' scans (comma-separated robot numbers, e.g. `1,2`).
     #[arg(long, value_delimiter = ',')]

@@ -395,22 +395,30 @@ fn the_real_data_study_runs_on_a_subset() {
         eprintln!("SKIPPED: shared/data/mrclam-dataset7 not found");
         return;
     };
-    let out = tmp("real");
-    ok(
-        &[
-            "pqrm",
-            "real",
-            "--input",
-            data.to_str().unwrap(),
-            "--max-frames",
-            "120",
-            "--samples",
-            "80",
-            "--out",
-            out.to_str().unwrap(),
-        ],
-        "",
-    );
+    // the default (a layout map), then the filter, whose τ the report also fits
+    for evidence in ["layout", "shared"] {
+        real_study_on_a_subset(&data, evidence);
+    }
+}
+
+fn real_study_on_a_subset(data: &Path, evidence: &str) {
+    let out = tmp(&format!("real-{evidence}"));
+    let mut args = vec![
+        "pqrm",
+        "real",
+        "--input",
+        data.to_str().unwrap(),
+        "--max-frames",
+        "120",
+        "--samples",
+        "80",
+        "--out",
+        out.to_str().unwrap(),
+    ];
+    if evidence != "layout" {
+        args.extend(["--evidence", evidence]);
+    }
+    ok(&args, "");
     for f in [
         "real.json",
         "real.csv",
@@ -443,6 +451,27 @@ fn the_real_data_study_runs_on_a_subset() {
         "six variants × six calculi"
     );
     assert!(sweep.contains("\nstudent-t:4,0.3,edc,"), "{sweep}");
+    assert!(report.contains(&format!(
+        "Evidence model: **{}",
+        if evidence == "layout" {
+            "layout"
+        } else {
+            "shared error"
+        }
+    )));
+    // the robots' maps are compared either way (under the layout model, the filter's)
+    let robots = std::fs::read_to_string(out.join("robots.csv")).unwrap();
+    assert!(
+        robots.lines().any(|l| l.starts_with("edc,merged,")),
+        "{robots}"
+    );
+    if evidence == "layout" {
+        // a layout map has no frames to temper: no τ fitted, and the report says why
+        assert!(!out.join("temper.csv").exists());
+        assert!(report.contains("layout model reads no frame"), "{report}");
+        std::fs::remove_dir_all(&out).ok();
+        return;
+    }
     let temper = std::fs::read_to_string(out.join("temper.csv")).unwrap();
     assert_eq!(temper.lines().count(), 1 + 6 * 15, "six calculi × 15 τ");
     assert_eq!(
@@ -452,11 +481,6 @@ fn the_real_data_study_runs_on_a_subset() {
     );
     assert!(report.contains("## Tempering chosen from the data"));
     assert!(out.join("temper_fit.svg").exists());
-    let robots = std::fs::read_to_string(out.join("robots.csv")).unwrap();
-    assert!(
-        robots.lines().any(|l| l.starts_with("edc,merged,")),
-        "{robots}"
-    );
     std::fs::remove_dir_all(&out).ok();
 }
 
@@ -480,6 +504,9 @@ fn per_robot_maps_merge_into_the_pooled_map() {
             "--samples",
             "300",
             "--per-robot",
+            // merging is the filter's: a layout map merges with nothing
+            "--evidence",
+            "shared",
             "--out",
             &s(&per),
         ],
@@ -497,6 +524,8 @@ fn per_robot_maps_merge_into_the_pooled_map() {
             &d,
             "--samples",
             "300",
+            "--evidence",
+            "shared",
             "--out",
             &s(&pooled),
         ],
@@ -522,6 +551,39 @@ fn per_robot_maps_merge_into_the_pooled_map() {
     assert!((em - ep).abs() < 0.02, "merged {em} vs pooled {ep}");
     // The merged map is a map: it loads and can be merged again.
     ok(&["reason", "check", &merged_s], "");
+    // A layout map (the default) is of a whole recording: merging it is refused by name.
+    let layout = out.join("layout");
+    ok(
+        &[
+            "map",
+            "--format",
+            "mrclam",
+            "--input",
+            &d,
+            "--out",
+            &s(&layout),
+        ],
+        "",
+    );
+    let layout_map = s(&layout.join("map.json"));
+    let o = qrm(
+        &[
+            "pqrm",
+            "merge",
+            &layout_map,
+            &merged_s,
+            "--out",
+            &s(&out.join("never.json")),
+        ],
+        "",
+    );
+    assert!(!o.status.success());
+    assert!(
+        String::from_utf8_lossy(&o.stderr).contains("layout map"),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    assert!(!out.join("never.json").exists());
     // --robots keeps only those robots' scans.
     let two = ok(
         &[
@@ -819,6 +881,8 @@ fn map_chooses_tau_from_the_data_and_sees_through_repeated_frames() {
             "csv",
             "--input",
             input.to_str().unwrap(),
+            "--evidence",
+            "shared",
             "--temper",
             "auto",
             "--out",
@@ -832,6 +896,25 @@ fn map_chooses_tau_from_the_data_and_sees_through_repeated_frames() {
         err.contains("--temper auto") && err.contains("at least 5 frames"),
         "{err}"
     );
+    assert!(!out.exists());
+    // the default layout map has no frames to temper: refused by name, nothing written
+    let o = qrm(
+        &[
+            "map",
+            "--format",
+            "csv",
+            "--input",
+            input.to_str().unwrap(),
+            "--temper",
+            "auto",
+            "--out",
+            out.to_str().unwrap(),
+        ],
+        "",
+    );
+    assert!(!o.status.success());
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("--temper") && err.contains("layout"), "{err}");
     assert!(!out.exists());
     let o = qrm(
         &[

@@ -24,7 +24,8 @@ def write_dataset(d):
 def test_a_pqrm_built_from_python_equals_one_built_by_rust(qrm_bin, tmp_path):
     obs, truth = write_dataset(tmp_path)
     out = tmp_path / "rust"
-    subprocess.run([qrm_bin, "map", "--format", "csv", "--input", str(obs), "--calculus", "edc", "--samples", "300", "--seed", "9", "--out", str(out)], check=True, capture_output=True)
+    # the filter, as Python's Pqrm is (`qrm map`'s default is the layout map: test below)
+    subprocess.run([qrm_bin, "map", "--format", "csv", "--input", str(obs), "--calculus", "edc", "--samples", "300", "--seed", "9", "--evidence", "shared", "--out", str(out)], check=True, capture_output=True)
     scans, _ = qrm.read_observations(str(obs), "csv")
     m = qrm.Pqrm(qrm.Calculus.builtin("edc"), samples=300, seed=9)
     for s in scans:
@@ -84,6 +85,36 @@ def test_mrclam_is_read_as_qrm_map_reads_it(mrclam_dir):
     with pytest.raises(qrm.InvalidInput, match=r'noise="auto" fits sigma_range') as e:
         qrm.read_observations(str(mrclam_dir), "mrclam", noise="auto", sigma_range=0.2)
     assert "--" not in str(e.value)
+
+
+def test_a_recording_mapped_by_its_layout_is_what_qrm_map_makes(mrclam_dir, qrm_bin, tmp_path):
+    """Issue 35: `qrm.layout_map` on what `read_observations` returns is `qrm map`'s default
+    map of the same recording, set for set; a layout map takes no frames and merges with
+    nothing; bad options are refused by name."""
+    scans, truth = qrm.read_observations(str(mrclam_dir), "mrclam")
+    edc = qrm.Calculus.builtin("edc")
+    m, fit = qrm.layout_map(edc, scans)
+    assert m.evidence == "layout" and fit["converged"] and fit["pairs"] > 20
+    assert 0.0 < fit["sigma_shared"] < fit["sigma_frame"] < 0.5
+    assert len(fit["landmarks"]) == 15 and all(v["sightings"] > 0 for v in fit["landmarks"].values())
+    assert m.metrics(truth)["error_rate"] < 0.05
+    subprocess.run([qrm_bin, "map", "--format", "mrclam", "--input", str(mrclam_dir), "--calculus", "edc", "--out", str(tmp_path / "cli")], check=True, capture_output=True)
+    cli = qrm.Pqrm.load(str(tmp_path / "cli" / "map.json"))
+    assert cli.evidence == "layout" and sorted(cli.sets()) == sorted(m.sets())
+    for s in m.sets()[::7]:
+        assert np.allclose(cli.belief(s), m.belief(s), atol=1e-5)
+    one = [s for s in scans if len(s["ids"]) >= 3][0]
+    with pytest.raises(qrm.QrmError, match="layout map"):
+        m.update(one["t"], one["ids"], one["xy"], one["cov"])
+    with pytest.raises(qrm.QrmError, match="layout map"):
+        m.merge(qrm.Pqrm(edc))
+    with pytest.raises(qrm.InvalidInput, match="orderings"):
+        qrm.layout_map(edc, scans, orderings="some")
+    canonical, _ = qrm.layout_map(edc, scans, orderings="canonical")
+    assert len(canonical) * 6 == len(m)
+    del scans[3]["cov"]
+    with pytest.raises(qrm.InvalidInput, match=r'scans\[3\] has no "cov"'):
+        qrm.layout_map(edc, scans)
 
 
 def test_single_observation_matches_phi():

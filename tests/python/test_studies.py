@@ -157,7 +157,7 @@ def test_the_real_data_study_runs_from_python_as_on_the_command_line(mrclam_dir,
     verdicts = [c["verdict"] for c in report["claims"]]
     assert [v in ("agree", "disagree") for v in verdicts] == [True] * 5 + [False] * 4, verdicts
     assert set(verdicts[5:]) <= {"holds", "violated"}
-    assert cfg["evidence"] == "shared:4" and cfg["also"] == []
+    assert cfg["evidence"] == "layout" and cfg["also"] == []
     assert len(run["output"]["results"]) == 6 and len(run["output"]["sensor_models"]) == 6
     out = tmp_path / "real"
     subprocess.run(

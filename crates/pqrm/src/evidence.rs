@@ -31,7 +31,9 @@
 //! On simulated recordings with known truth (`crates/pqrm/tests/shared_error.rs`) eq. 2.10
 //! is overconfident with and without a shared offset, and the model at the offset's `N` is
 //! calibrated. On real recordings `N` is not known; [`DEFAULT_SHARED_FRAMES`] says how its
-//! default was chosen.
+//! default was chosen, and no constant serves every recording. A whole recording shows its
+//! own shared error: [`EvidenceModel::Layout`] reads every set from the recording's layout
+//! ([`crate::layout`]), the default of `qrm map` and `qrm pqrm real`.
 
 use std::fmt;
 
@@ -70,6 +72,11 @@ pub enum EvidenceModel {
         /// `N = σ² / σ_b²`, in `(0, MAX_SHARED_FRAMES]` or `∞` (no shared offset).
         frames: f64,
     },
+    /// The belief of each set read from the whole recording's layout and the error its frames
+    /// share beyond it ([`crate::layout`]): the rows are those beliefs, read as they are. Such
+    /// a map is made from a recording at once (`Layout::map`); frames cannot be added to it,
+    /// it cannot be merged, and its rows are not eq. 2.10's sums to be read another way.
+    Layout,
 }
 
 impl EvidenceModel {
@@ -85,7 +92,7 @@ impl EvidenceModel {
     #[must_use]
     pub fn exponent(self, updates: u32) -> f64 {
         match self {
-            Self::Independent => 1.0,
+            Self::Independent | Self::Layout => 1.0,
             Self::Shared { frames } => {
                 let n = f64::from(updates.max(1));
                 1.0 / (n * (1.0 + n / frames)).sqrt()
@@ -99,7 +106,7 @@ impl EvidenceModel {
     /// [`PqrmError::InvalidConfig`] naming the value.
     pub fn validate(self) -> Result<()> {
         match self {
-            Self::Independent => Ok(()),
+            Self::Independent | Self::Layout => Ok(()),
             Self::Shared { frames } if frames > 0.0 => {
                 if frames <= MAX_SHARED_FRAMES || frames == f64::INFINITY {
                     Ok(())
@@ -117,7 +124,8 @@ impl EvidenceModel {
         }
     }
 
-    /// Parses `independent`, `shared` (the default N) or `shared:N` (`N` a number or `inf`).
+    /// Parses `independent`, `shared` (the default N), `shared:N` (`N` a number or `inf`) or
+    /// `layout`.
     ///
     /// # Errors
     /// [`PqrmError::InvalidConfig`] saying what was given and what is accepted.
@@ -125,6 +133,8 @@ impl EvidenceModel {
         let t = text.trim();
         let model = if t.eq_ignore_ascii_case("independent") {
             Self::Independent
+        } else if t.eq_ignore_ascii_case("layout") {
+            Self::Layout
         } else if t.eq_ignore_ascii_case("shared") {
             Self::shared_default()
         } else if let Some(n) = t.strip_prefix("shared:") {
@@ -136,7 +146,8 @@ impl EvidenceModel {
             Self::Shared { frames }
         } else {
             return Err(PqrmError::InvalidConfig(format!(
-                "evidence `{text}`: expected `independent` (eq. 2.10), `shared` or `shared:N`"
+                "evidence `{text}`: expected `independent` (eq. 2.10), `shared`, `shared:N` or \
+                 `layout`"
             )));
         };
         model.validate()?;
@@ -148,6 +159,7 @@ impl fmt::Display for EvidenceModel {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
             Self::Independent => f.write_str("independent"),
+            Self::Layout => f.write_str("layout"),
             Self::Shared { frames } if frames.is_infinite() => f.write_str("shared:inf"),
             Self::Shared { frames } => write!(f, "shared:{frames}"),
         }

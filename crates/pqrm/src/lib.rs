@@ -25,7 +25,11 @@
 //!   held-out blocks of frames, makes the map's confidence honest without ground truth.
 //! - **Shared error** ([`evidence`]): frames of one set that share an error prove less than
 //!   eq. 2.10 says; the shared-error model reads each set's stored sum with an exponent that
-//!   caps its evidence, so a real recording's probabilities are ones a robot can bet on.
+//!   caps its evidence. It cannot know how much a recording's frames share.
+//! - **The layout** ([`layout`]): a whole recording can. Every frame aligned into one layout
+//!   of the landmarks (generalised Procrustes), the frames' disagreement with it measures the
+//!   error they share, and each set's belief is read from the layout give or take that error —
+//!   calibrated on every MRCLAM recording tried, the default for recorded data.
 //! - **The survey checked against the robots** ([`survey`]): a map scored against surveyed
 //!   positions is split into the sets whose landmark pairs every frame sees as surveyed and
 //!   those it does not, so a report says which misses the survey itself explains.
@@ -50,6 +54,7 @@ pub mod calibration;
 pub mod config;
 pub mod error;
 pub mod evidence;
+pub mod layout;
 pub mod likelihood;
 pub mod loaders;
 pub mod map;

@@ -233,8 +233,54 @@ impl Pqrm {
     /// [`PqrmError::InvalidConfig`] for a shared-error model out of range.
     pub fn with_evidence(mut self, evidence: EvidenceModel) -> Result<Self> {
         evidence.validate()?;
+        // a layout map's rows are beliefs, a filter's are sums: neither reads as the other
+        let layout = |m: EvidenceModel| m == EvidenceModel::Layout;
+        if !self.is_empty() && layout(evidence) != layout(self.evidence) {
+            return Err(PqrmError::InvalidConfig(format!(
+                "a map under `{}` cannot be read as `{evidence}`: a layout map's rows are the \
+                 layout's beliefs, a filter's are eq. 2.10's sums (map the recording again)",
+                self.evidence
+            )));
+        }
         self.evidence = evidence;
         Ok(self)
+    }
+
+    /// `Err` for a layout map ([`EvidenceModel::Layout`]): its beliefs come from the whole
+    /// recording at once, so no frame or map can be folded into them.
+    fn expect_filter(&self, what: &str) -> Result<()> {
+        if self.evidence == EvidenceModel::Layout {
+            return Err(PqrmError::InvalidConfig(format!(
+                "cannot {what} a layout map: its beliefs come from the layout of a whole \
+                 recording (fit the layout again over all the frames: `qrm map --evidence \
+                 layout`, `pqrm::layout::Layout::map`)"
+            )));
+        }
+        Ok(())
+    }
+
+    /// A layout map ([`EvidenceModel::Layout`]) of the given rows: each set, the frames that
+    /// saw it, its belief (normalised, every state possible).
+    pub(crate) fn from_beliefs(
+        calculus: Calculus,
+        config: PqrmConfig,
+        steps: u64,
+        rows: Vec<crate::layout::SetBelief>,
+    ) -> Result<Self> {
+        let mut map = Self::new(calculus, config)?.with_evidence(EvidenceModel::Layout)?;
+        map.steps = steps;
+        map.store.reserve_exact(rows.len());
+        for (set, updates, belief) in rows {
+            if map.store.slot(&set).is_some() {
+                return Err(PqrmError::Mismatch(format!(
+                    "set {:?} given twice",
+                    set.ids()
+                )));
+            }
+            let row: Vec<f64> = belief.iter().map(|p| p.ln()).collect();
+            map.store.push(set, &normalise(row), updates);
+        }
+        Ok(map)
     }
 
     /// How the frames of a set combine into its belief (eq. 2.10 unless set).
@@ -324,6 +370,7 @@ impl Pqrm {
     /// # Errors
     /// [`PqrmError::CoincidentLandmarks`] (nothing is changed then).
     pub fn update(&mut self, scan: &Scan) -> Result<UpdateReport> {
+        self.expect_filter("add frames to")?;
         let samples = ScanSamples::draw_with(
             scan,
             self.config.samples,
@@ -348,6 +395,7 @@ impl Pqrm {
     /// # Errors
     /// [`PqrmError::Mismatch`] when the histograms have the wrong number of states.
     pub fn apply_counts(&mut self, counts: &StepCounts) -> Result<UpdateReport> {
+        self.expect_filter("add frames to")?;
         let mut buffers = std::mem::take(&mut self.buffers);
         let report = self.fold_counts(counts, &mut buffers);
         self.buffers = buffers;
@@ -562,6 +610,8 @@ impl Pqrm {
     /// # Errors
     /// [`PqrmError::Mismatch`] when the calculi differ.
     pub fn merge(&mut self, other: &Pqrm) -> Result<()> {
+        self.expect_filter("merge into")?;
+        other.expect_filter("merge")?;
         if self.calculus.spec() != other.calculus.spec() {
             return Err(PqrmError::Mismatch(format!(
                 "cannot merge a `{}` map into a `{}` map",

@@ -503,6 +503,15 @@ fn build_map(
     evidence: EvidenceModel,
     progress: &dyn Progress,
 ) -> Result<Pqrm> {
+    if evidence == EvidenceModel::Layout {
+        // a layout map is read from the whole recording at once
+        for _ in scans {
+            progress.check()?;
+            progress.tick();
+        }
+        let layout = crate::layout::Layout::fit(scans, progress)?;
+        return layout.map(calc.clone(), scans, config, &|| {});
+    }
     let mut map = Pqrm::new(calc.clone(), config)?.with_evidence(evidence)?;
     for scan in scans {
         progress.check()?;
@@ -1147,5 +1156,27 @@ mod tests {
                 .ours
                 .contains("no information")
         );
+    }
+}
+
+#[cfg(test)]
+mod layout_tests {
+    #![allow(clippy::unwrap_used)]
+
+    use super::*;
+
+    /// The study can reason over layout maps (`evidence = "layout"`): a map of the same sets
+    /// as the filter's, read from the recording's layout instead of refused frame by frame.
+    #[test]
+    fn the_study_maps_a_recording_by_its_layout_when_asked() {
+        let config = ReasonStudyConfig::quick();
+        let (_, scans) = simulate_trial(&config.world, 0.3, 0, 0);
+        let calc = Calculus::builtin("double-cross").unwrap();
+        let layout = build_map(&calc, &scans, config.map, EvidenceModel::Layout, &|| {}).unwrap();
+        let filter = build_map(&calc, &scans, config.map, config.evidence, &|| {}).unwrap();
+        assert_eq!(layout.evidence(), EvidenceModel::Layout);
+        let sets = |m: &Pqrm| m.iter().map(|(s, _)| *s).collect::<Vec<_>>();
+        assert_eq!(sets(&layout), sets(&filter));
+        assert!(!layout.is_empty());
     }
 }

@@ -747,6 +747,12 @@ pub fn run_real_tempered(
         })
         .collect::<Result<Vec<_>>>()?;
     let n = family.calculi.len();
+    // a layout map is read from the whole recording at once, after the votes are counted
+    let layout = if evidence == crate::EvidenceModel::Layout {
+        Some(crate::layout::Layout::fit(&dataset.scans, progress)?)
+    } else {
+        None
+    };
     // Per calculus and triplet: how many frames voted for each state, and the summed
     // single-frame probability (the tie-breaker).
     let mut votes: Vec<BTreeMap<LandmarkSet, Votes>> = vec![BTreeMap::new(); n];
@@ -792,7 +798,14 @@ pub fn run_real_tempered(
                 }
                 frames[i].add(calc, &b, t);
             }
-            maps[i].apply_counts(&counts)?;
+            if layout.is_none() {
+                maps[i].apply_counts(&counts)?;
+            }
+        }
+    }
+    if let Some(layout) = &layout {
+        for (map, calc) in maps.iter_mut().zip(&family.calculi) {
+            *map = layout.map(calc.clone(), &dataset.scans, config, &|| {})?;
         }
     }
     let agreement = crate::survey::SurveyAgreement::measure(

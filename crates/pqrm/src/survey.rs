@@ -160,7 +160,7 @@ impl Thinned {
 }
 
 /// The median of `v` (not empty; reorders it).
-fn median(v: &mut [f64]) -> f64 {
+pub(crate) fn median(v: &mut [f64]) -> f64 {
     let mid = v.len() / 2;
     let (_, m, _) = v.select_nth_unstable_by(mid, f64::total_cmp);
     let upper = *m;

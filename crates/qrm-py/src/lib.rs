@@ -45,6 +45,7 @@ fn _qrm(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(study_runner::studies_save, m)?)?;
     m.add_function(wrap_pyfunction!(mapping::read_observations, m)?)?;
     m.add_function(wrap_pyfunction!(mapping::survey_agreement, m)?)?;
+    m.add_function(wrap_pyfunction!(mapping::layout_map, m)?)?;
     m.add_function(wrap_pyfunction!(mapping::single_observation, m)?)?;
     m.add_function(wrap_pyfunction!(mapping::monte_carlo_shard, m)?)?;
     m.add_function(wrap_pyfunction!(mapping::monte_carlo_aggregate, m)?)?;

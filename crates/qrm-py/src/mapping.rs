@@ -450,7 +450,25 @@ pub(crate) fn survey_agreement<'py>(
     if min_frames == 0 {
         return Err(invalid("min_frames must be at least 1"));
     }
-    let parsed = scans
+    let parsed = scans_from_dicts(&scans)?;
+    let truth = truth_from_dict(&survey);
+    let agreement = crate::pool::detach(py, || {
+        pqrm::survey::SurveyAgreement::measure(&parsed, &truth, off, min_frames)
+    });
+    let d = PyDict::new(py);
+    d.set_item("pairs_seen", agreement.pairs_seen)?;
+    let pairs: Vec<(u32, u32, f64, usize)> = agreement
+        .off
+        .iter()
+        .map(|p| (p.pair[0].0, p.pair[1].0, p.median, p.frames))
+        .collect();
+    d.set_item("off", pairs)?;
+    Ok(d)
+}
+
+/// Scans as `read_observations` returns them (dicts with "t", "robot", "ids", "xy", "cov").
+fn scans_from_dicts(scans: &[Bound<'_, PyDict>]) -> PyResult<Vec<Scan>> {
+    scans
         .iter()
         .enumerate()
         .map(|(k, d)| {
@@ -478,20 +496,66 @@ pub(crate) fn survey_agreement<'py>(
             )
             .map_err(|e| invalid(format!("scans[{k}]: {e}")))
         })
-        .collect::<PyResult<Vec<Scan>>>()?;
-    let truth = truth_from_dict(&survey);
-    let agreement = crate::pool::detach(py, || {
-        pqrm::survey::SurveyAgreement::measure(&parsed, &truth, off, min_frames)
-    });
+        .collect::<PyResult<Vec<Scan>>>()
+}
+
+/// The layout map of a recording (`pqrm::layout`, what `qrm map --evidence layout` makes, its
+/// default): every frame aligned into one layout of the landmarks, each set's belief the share
+/// of draws of its three positions — the layout's, give or take the error the frames share
+/// beyond it, measured from the frames — that fall in each state. `scans` as
+/// `read_observations` returns them. Returns (map, layout): the map a `Pqrm` whose evidence
+/// is "layout" (it takes no more frames and merges with nothing: map the whole recording
+/// again), layout a dict {"sigma_shared", "sigma_frame", "pairs", "rounds", "converged",
+/// "landmarks": {id: {"position": (x, y), "sightings", "component", "sigma_shared"}}}.
+#[pyfunction]
+#[pyo3(signature = (calculus, scans, *, orderings = "all", seed = 0))]
+pub(crate) fn layout_map<'py>(
+    py: Python<'py>,
+    calculus: &Calculus,
+    scans: Vec<Bound<'py, PyDict>>,
+    orderings: &str,
+    seed: u64,
+) -> PyResult<(Pqrm, Bound<'py, PyDict>)> {
+    let orderings = match orderings {
+        "all" => Orderings::All,
+        "canonical" => Orderings::Canonical,
+        other => {
+            return Err(invalid(format!(
+                "orderings must be \"all\" or \"canonical\", got {other:?}"
+            )));
+        }
+    };
+    let parsed = scans_from_dicts(&scans)?;
+    let config = PqrmConfig {
+        orderings,
+        seed,
+        ..PqrmConfig::default()
+    };
+    let calc = calculus.inner.clone();
+    let (layout, map) = crate::pool::detach(py, || {
+        let layout = pqrm::layout::Layout::fit(&parsed, &|| {})?;
+        let map = layout.map(calc, &parsed, config, &|| {})?;
+        Ok::<_, pqrm::PqrmError>((layout, map))
+    })
+    .map_err(perr)?;
     let d = PyDict::new(py);
-    d.set_item("pairs_seen", agreement.pairs_seen)?;
-    let pairs: Vec<(u32, u32, f64, usize)> = agreement
-        .off
-        .iter()
-        .map(|p| (p.pair[0].0, p.pair[1].0, p.median, p.frames))
-        .collect();
-    d.set_item("off", pairs)?;
-    Ok(d)
+    let shared = layout.shared_error();
+    d.set_item("sigma_shared", shared.sigma_shared)?;
+    d.set_item("sigma_frame", shared.sigma_frame)?;
+    d.set_item("pairs", shared.pairs)?;
+    d.set_item("rounds", layout.rounds())?;
+    d.set_item("converged", layout.converged())?;
+    let marks = PyDict::new(py);
+    for (id, m) in layout.landmarks() {
+        let one = PyDict::new(py);
+        one.set_item("position", (m.position[0], m.position[1]))?;
+        one.set_item("sightings", m.sightings)?;
+        one.set_item("component", m.component)?;
+        one.set_item("sigma_shared", m.sigma_shared)?;
+        marks.set_item(id.0, one)?;
+    }
+    d.set_item("landmarks", marks)?;
+    Ok((Pqrm { inner: map }, d))
 }
 
 /// Reads an observation file as `qrm map` reads it: `format` is "csv", "mrclam" (a

@@ -8,6 +8,7 @@ use std::collections::BTreeSet;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
+use pqrm::layout::Layout;
 use pqrm::loaders::{Dataset, read_truth_csv};
 use pqrm::map_file::MapFormat;
 use pqrm::temper::{TemperChoice, TemperFit, TemperOptions, fit_temper};
@@ -366,17 +367,31 @@ impl MapJob {
             orderings: input.orderings,
             ..self.config
         };
-        let (config, temper_fit) = self.temper(data, config, progress)?;
-        let mut map = Pqrm::new(self.calculus.clone(), config)?.with_evidence(self.evidence)?;
         let start = Instant::now();
-        progress.add_total(data.scans.len());
-        for scan in &data.scans {
-            progress.check()?;
-            map.update(scan)?;
-            progress.tick();
-        }
-        // done growing: what is summarised and saved below has the memory
-        map.release_step_buffers();
+        let (map, config, temper_fit, layout) = if self.evidence == pqrm::EvidenceModel::Layout {
+            if self.temper != TemperChoice::Fixed(1.0) {
+                return Err(StudyError::InvalidParameter(
+                    "--temper tempers the filter's frames; a layout map (--evidence layout) \
+                     has none to temper"
+                        .into(),
+                ));
+            }
+            let fitted = Layout::fit(&data.scans, progress)?;
+            let map = fitted.map(self.calculus.clone(), &data.scans, config, progress)?;
+            (map, config, None, Some(fitted))
+        } else {
+            let (config, temper_fit) = self.temper(data, config, progress)?;
+            let mut map = Pqrm::new(self.calculus.clone(), config)?.with_evidence(self.evidence)?;
+            progress.add_total(data.scans.len());
+            for scan in &data.scans {
+                progress.check()?;
+                map.update(scan)?;
+                progress.tick();
+            }
+            // done growing: what is summarised and saved below has the memory
+            map.release_step_buffers();
+            (map, config, temper_fit, None)
+        };
         let robots: BTreeSet<u32> = data.scans.iter().map(|s| s.robot).collect();
         let mut summary = Map::new();
         let mut put = |k: &str, v: Value| {
@@ -398,6 +413,21 @@ impl MapJob {
         put("seconds", json!(start.elapsed().as_secs_f64()));
         if let Some(fit) = &temper_fit {
             put("temper_fit", json!(fit));
+        }
+        if let Some(l) = &layout {
+            put(
+                "layout",
+                json!({
+                    "shared_error": l.shared_error(),
+                    "landmarks": l
+                        .landmarks()
+                        .iter()
+                        .map(|(id, m)| (id.0.to_string(), json!(m)))
+                        .collect::<Map<String, Value>>(),
+                    "rounds": l.rounds(),
+                    "converged": l.converged(),
+                }),
+            );
         }
         for (k, v) in &input.reading {
             put(k, v.clone());

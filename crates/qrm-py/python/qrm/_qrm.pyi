@@ -5,7 +5,7 @@ from typing import Any, Callable, Union, Dict, List, Optional, Tuple, final
 import numpy as np
 import numpy.typing as npt
 
-from .types import ConsistencyCheck, Frame, Inference, MapMetrics, Neighbours, Observations, SurveyAgreement, UpdateReport
+from .types import ConsistencyCheck, Frame, Inference, LayoutFit, MapMetrics, Neighbours, Observations, SurveyAgreement, UpdateReport
 
 _Callback = Optional[Callable[[int, int], object]]
 
@@ -24,6 +24,7 @@ __all__ = [
     "Pqrm",
     "read_observations",
     "survey_agreement",
+    "layout_map",
     "single_observation",
     "monte_carlo_shard",
     "monte_carlo_aggregate",
@@ -266,6 +267,13 @@ def survey_agreement(
     off: float = 0.1,
     min_frames: int = 5,
 ) -> SurveyAgreement: ...
+def layout_map(
+    calculus: Calculus,
+    scans: List[Observations],
+    *,
+    orderings: str = "all",
+    seed: int = 0,
+) -> Tuple[Pqrm, LayoutFit]: ...
 def single_observation(
     calculus: Calculus,
     points: npt.ArrayLike,

@@ -44,6 +44,8 @@ __all__ = [
     "QlinkRecord",
     "QlinkStudy",
     "QlinkTableRow",
+    "LayoutFit",
+    "LayoutLandmark",
     "RobotAblation",
     "Schedule",
     "SurveyAgreement",
@@ -67,6 +69,35 @@ class Observations(TypedDict):
     """positions (m), shape (n, 2)"""
     cov: npt.NDArray[np.float64]
     """covariances [cxx, cxy, cyy] (m²), shape (n, 3)"""
+
+
+class LayoutLandmark(TypedDict):
+    """One landmark of a recording's layout (`layout_map`)."""
+
+    position: Tuple[float, float]
+    """where the frames put it (m), in its component's frame"""
+    sightings: int
+    """frames (of three or more landmarks) that saw it"""
+    component: int
+    """landmarks linked by frames that saw them together share a component"""
+    sigma_shared: float
+    """the error its frames share beyond the layout (m, as a pair's distance)"""
+
+
+class LayoutFit(TypedDict):
+    """A recording's layout and the error its frames share beyond it (`layout_map`)."""
+
+    sigma_shared: float
+    """the recording's shared error (m, as a landmark pair's distance)"""
+    sigma_frame: float
+    """one frame's spread of a pair's distance (m)"""
+    pairs: int
+    """landmark pairs seen together in at least 5 frames"""
+    rounds: int
+    """rounds of alignment the fit took"""
+    converged: bool
+    """whether the fit stopped because nothing moved"""
+    landmarks: Dict[int, LayoutLandmark]
 
 
 class SurveyAgreement(TypedDict):

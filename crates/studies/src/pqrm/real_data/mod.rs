@@ -90,9 +90,11 @@ pub struct RealDataConfig {
     /// The sensor models and temperings the report compares, one shard each (read as
     /// independent frames, eq. 2.10).
     pub variants: Vec<Variant>,
-    /// How the main run's maps read a set's frames (`pqrm::evidence`): `"shared:N"` (the
-    /// default, N chosen by leaving one recording out) or `"independent"` (eq. 2.10).
-    #[serde(default = "EvidenceModel::shared_default")]
+    /// How the main run's maps read a set's frames (`pqrm::evidence`): `"layout"` (the
+    /// default: each recording's layout and the error its frames share beyond it,
+    /// `pqrm::layout`), `"shared:N"` (the filter, N chosen by leaving one recording out) or
+    /// `"independent"` (eq. 2.10).
+    #[serde(default = "layout_evidence")]
     pub evidence: EvidenceModel,
     /// Other recordings scored with the main settings, one row per recording and calculus in
     /// `recordings.csv` (MRCLAM directories).
@@ -126,7 +128,7 @@ impl RealDataConfig {
             sensor: SensorModel::Gaussian,
             temper: TemperChoice::Fixed(1.0),
             variants: standard_variants(),
-            evidence: EvidenceModel::shared_default(),
+            evidence: EvidenceModel::Layout,
             also: Vec::new(),
             seed,
         }
@@ -401,6 +403,10 @@ impl Study for RealData {
     }
 }
 
+fn layout_evidence() -> EvidenceModel {
+    EvidenceModel::Layout
+}
+
 /// Units of the main run's phases over `data`: fitting τ (two passes), the main maps, the
 /// robots compared (when there are two or more), τ = 1 and the chosen τ.
 fn main_units(c: &RealDataConfig, data: &Dataset) -> [usize; 4] {
@@ -431,7 +437,20 @@ fn main_run(c: &RealDataConfig, rec: Recording, progress: &dyn Progress) -> Resu
         .collect::<std::result::Result<Vec<_>, _>>()?;
     // τ chosen from the data is always measured (the report compares it with τ = 1); the
     // main run uses it only with `temper = "auto"`.
+    let layout = c.evidence == pqrm::EvidenceModel::Layout;
+    if layout && c.temper != TemperChoice::Fixed(1.0) {
+        return Err(StudyError::InvalidParameter(
+            "temper: a layout map (evidence = \"layout\") has no frames to temper; leave τ at 1"
+                .into(),
+        ));
+    }
     let fitted_or_not = phase(progress, fit_units, |p| {
+        if layout {
+            // τ tempers the filter's frames; a layout map has none (reported as not fitted)
+            return Err(pqrm::PqrmError::InvalidConfig(
+                "the layout model reads no frame's evidence to temper".into(),
+            ));
+        }
         // fitted under the model the main run reads its maps with (the τ is on top of it)
         fit_temper(
             &calcs,
@@ -460,8 +479,15 @@ fn main_run(c: &RealDataConfig, rec: Recording, progress: &dyn Progress) -> Resu
         run_real_tempered(data, &c.calculi, config, &tempers, c.evidence, p)
     })?;
     let robots = phase(progress, robot_units, |p| {
+        // the comparison merges robots' maps, which only the filter's can be: under the
+        // layout model it compares the filter's, read under the shared-error model
+        let evidence = if layout {
+            pqrm::EvidenceModel::shared_default()
+        } else {
+            c.evidence
+        };
         if robot_units > 0 {
-            compare_robots(data, &calcs, (config, c.evidence), &tempers, p)
+            compare_robots(data, &calcs, (config, evidence), &tempers, p)
         } else {
             Ok(Vec::new())
         }

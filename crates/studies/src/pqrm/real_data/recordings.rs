@@ -117,6 +117,10 @@ pub fn evidence_sentence(evidence: EvidenceModel) -> String {
             "Evidence model: **shared error** worth {frames} independent frames (`pqrm::evidence`): frames share the geometry and an error, \
              so a set seen n times is read with exponent τ(n) = 1/√(n·(1 + n/{frames})); most likely states are those of eq. 2.10."
         ),
+        EvidenceModel::Layout => "Evidence model: **layout** (`pqrm::layout`): every frame aligned into one layout \
+             of the landmarks, a set's belief the share of draws of its three positions — the layout's, give or take \
+             the error the frames share beyond it, measured on each recording — that fall in each state."
+            .to_owned(),
     }
 }
 

@@ -572,7 +572,8 @@ fn many_robots_table(robots: &[RobotComparison]) -> Table {
          by adding log-likelihoods (`qrm pqrm merge`; no common frame needed). A single robot sees fewer triplets, so its error is \
          compared with the merged map's error *on the same triplets*. Agreement: the share of triplets whose most likely state is \
          the same in the merged and pooled maps; TV: their mean total-variation distance (0 = identical beliefs; the rest is \
-         sampling noise, the two filters draw different samples).",
+         sampling noise, the two filters draw different samples). Merging is the filter's: under the layout model (a map of \
+         a whole recording, which merges with nothing) these are the filter's maps read under the shared-error model.",
     );
     let pair = |a: f64, b: f64| Cell {
         csv: format!("{a};{b}"),
@@ -663,7 +664,7 @@ fn notes(out: &RealDataOutput) -> String {
     let mut s = String::new();
     if let Some(why) = &out.main.tempering_failed {
         s.push_str(&format!(
-            "τ could not be chosen from this recording ({why}); the tempering section is left out.\n\n"
+            "τ was not chosen from this recording ({why}); the tempering section is left out.\n\n"
         ));
     }
     s.push_str(
