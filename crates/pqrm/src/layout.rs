@@ -175,7 +175,7 @@ impl Layout {
                 sigma: s
                     .observations
                     .iter()
-                    .map(|o| (0.5 * (o.cov[0][0] + o.cov[1][1])).max(0.0).sqrt())
+                    .map(|o| (0.5 * o.cov[0][0] + 0.5 * o.cov[1][1]).max(0.0).sqrt())
                     .collect(),
             })
             .collect();
