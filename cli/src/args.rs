@@ -277,14 +277,15 @@ pub struct MapArgs {
     /// truth needed; the choice goes into summary.json).
     #[arg(long, default_value = "1")]
     pub temper: String,
-    /// How the frames of one landmark set combine (`pqrm::evidence`): `layout` (the default:
-    /// every frame aligned into one layout of the landmarks, a set's belief read from it and
-    /// from the error the frames share beyond it, measured on the recording itself —
-    /// `pqrm::layout`, calibrated on every MRCLAM recording tried), `shared` (the filter's
-    /// frames share the geometry and an error as large as N = 4 independent frames'; `shared:N`,
-    /// `shared:inf`; a map that can take more frames and be merged) or `independent`, the
-    /// thesis's eq. 2.10 (probabilities overconfident on real recordings).
-    #[arg(long, default_value = "layout")]
+    /// How the frames of one landmark set combine (`pqrm::evidence`): `auto` (the default:
+    /// `layout` where the frames agree on one layout and τ = 1, else `shared`; summary.json's
+    /// `evidence_choice` says which and why), `layout` (every frame aligned into one layout of
+    /// the landmarks, a set's belief read from it and from the error the frames share beyond
+    /// it, measured on the recording itself — `pqrm::layout`, calibrated on every MRCLAM
+    /// recording tried), `shared` (the filter's frames share the geometry and an error as large
+    /// as N = 4 independent frames'; `shared:N`, `shared:inf`; a map that can take more frames
+    /// and be merged) or `independent`, the thesis's eq. 2.10 (overconfident on real data).
+    #[arg(long, default_value = "auto")]
     pub evidence: String,
     /// Map only these robots' scans (comma-separated robot numbers, e.g. `1,2`).
     #[arg(long, value_delimiter = ',')]

@@ -145,7 +145,12 @@ fn map_job(a: &MapArgs) -> Result<MapJob> {
         config,
         orderings: a.orderings.into(),
         temper: TemperChoice::parse(&a.temper).context("--temper")?,
-        evidence: pqrm::EvidenceModel::parse(&a.evidence).context("--evidence")?,
+        evidence: if a.evidence.trim() == "auto" {
+            pqrm::EvidenceModel::Layout
+        } else {
+            pqrm::EvidenceModel::parse(&a.evidence).context("--evidence")?
+        },
+        auto_evidence: a.evidence.trim() == "auto",
         map_format: a.map_format.into(),
     })
 }
@@ -163,6 +168,14 @@ fn map_into(
     let pb = crate::progress::Bar::new(0, label);
     let mut mapped = job.map(input, data, &pb)?;
     pb.finish_and_clear();
+    if let Some(why) = mapped
+        .summary
+        .get("evidence_choice")
+        .and_then(|v| v.as_str())
+        && why.contains("disagree")
+    {
+        eprintln!("warning: {label}: {why}");
+    }
     if let Some(fit) = &mapped.temper_fit {
         eprintln!(
             "{label}: τ = {:.3} chosen from held-out frames (log score {:.4} vs {:.4} at τ = 1)",

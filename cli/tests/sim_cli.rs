@@ -120,6 +120,14 @@ fn lidar_only_mapping_is_a_pipeline_too() {
         s["error_rate"].as_f64().unwrap() < 0.3,
         "lidar-only maps mostly right: {s}"
     );
+    // half the ids are false landmarks: the frames agree on no one layout, so the default
+    // (`--evidence auto`) maps with the filter and says why (a layout map of them: error 0.46)
+    let why = s["evidence_choice"].as_str().unwrap();
+    assert!(
+        why.contains("the filter") && why.contains("disagree"),
+        "{why}"
+    );
+    assert_eq!(s["evidence"], "shared:4");
 }
 
 #[test]

@@ -189,10 +189,26 @@ pub struct MapJob {
     pub orderings: OrderingsChoice,
     /// τ, or `auto`.
     pub temper: TemperChoice,
-    /// How a set's frames combine into its belief (`shared` by default on recordings).
+    /// How a set's frames combine into its belief.
     pub evidence: pqrm::EvidenceModel,
+    /// `--evidence auto`, the default (with `evidence` the layout): the layout map where the
+    /// frames agree on one layout ([`layout_agrees`]) and τ = 1, else the filter under the
+    /// shared-error model; the summary says which and why.
+    pub auto_evidence: bool,
     /// The map file's format.
     pub map_format: MapFormatChoice,
+}
+
+/// Whether the frames agree on one layout: the error they share beyond it within their own
+/// noise (`σ_shared ≤ σ_frame`). A layout map assumes one rigid layout every frame sees; where
+/// the frames disagree with their best layout by more than their own noise, ids do not name
+/// one place in every frame (the lidar-only pipeline's false and swapped landmarks: σ_shared
+/// 5.1 m against σ_frame 3·10⁻⁵ m) and the filter, whose evidence stays within each set's
+/// frames, is the better map. MRCLAM's recordings measure 0.25–0.49 of their noise.
+#[must_use]
+pub fn layout_agrees(layout: &Layout) -> bool {
+    let s = layout.shared_error();
+    s.sigma_shared <= s.sigma_frame
 }
 
 /// The recording a [`MapJob`] read, and what the reading did.
@@ -328,6 +344,17 @@ impl MapJob {
         config: PqrmConfig,
         progress: &dyn Progress,
     ) -> Result<(PqrmConfig, Option<TemperFit>)> {
+        self.temper_under(self.evidence, data, config, progress)
+    }
+
+    /// [`MapJob::temper`] for a map read under `evidence`.
+    fn temper_under(
+        &self,
+        evidence: pqrm::EvidenceModel,
+        data: &Dataset,
+        config: PqrmConfig,
+        progress: &dyn Progress,
+    ) -> Result<(PqrmConfig, Option<TemperFit>)> {
         match self.temper {
             TemperChoice::Fixed(temper) => Ok((PqrmConfig { temper, ..config }, None)),
             TemperChoice::Auto => {
@@ -337,7 +364,7 @@ impl MapJob {
                     &data.scans,
                     config,
                     // the τ is chosen on top of the evidence model the map is read under
-                    &TemperOptions::default().evidence(self.evidence),
+                    &TemperOptions::default().evidence(evidence),
                     &|| progress.tick(),
                 )
                 .map_err(|e| match e {
@@ -358,6 +385,42 @@ impl MapJob {
         }
     }
 
+    /// The model `data` is mapped under, with the fitted layout when that is the layout, and,
+    /// for `auto`, what was chosen and why.
+    fn choose_evidence(
+        &self,
+        data: &Dataset,
+        progress: &dyn Progress,
+    ) -> Result<(pqrm::EvidenceModel, Option<Layout>, Option<String>)> {
+        if self.evidence != pqrm::EvidenceModel::Layout {
+            return Ok((self.evidence, None, None));
+        }
+        let filter = pqrm::EvidenceModel::shared_default();
+        if self.auto_evidence && self.temper != TemperChoice::Fixed(1.0) {
+            return Ok((
+                filter,
+                None,
+                Some(format!("auto: the filter ({filter}): τ tempers its frames")),
+            ));
+        }
+        let fitted = Layout::fit(&data.scans, progress)?;
+        if self.auto_evidence && !layout_agrees(&fitted) {
+            let s = fitted.shared_error();
+            return Ok((
+                filter,
+                None,
+                Some(format!(
+                    "auto: the filter ({filter}): the frames disagree with their best layout by \
+                     σ {:.3} m, more than their own noise (σ {:.3} m) — landmark ids that do not \
+                     name one place in every frame",
+                    s.sigma_shared, s.sigma_frame
+                )),
+            ));
+        }
+        let why = self.auto_evidence.then(|| "auto: the layout".to_owned());
+        Ok((pqrm::EvidenceModel::Layout, Some(fitted), why))
+    }
+
     /// Maps `data` (all of the input, or one robot's) with the orderings `input` chose.
     ///
     /// # Errors
@@ -368,7 +431,8 @@ impl MapJob {
             ..self.config
         };
         let start = Instant::now();
-        let (map, config, temper_fit, layout) = if self.evidence == pqrm::EvidenceModel::Layout {
+        let (evidence, layout, why) = self.choose_evidence(data, progress)?;
+        let (map, config, temper_fit, layout) = if let Some(fitted) = layout {
             if self.temper != TemperChoice::Fixed(1.0) {
                 return Err(StudyError::InvalidParameter(
                     "--temper tempers the filter's frames; a layout map (--evidence layout) \
@@ -376,12 +440,11 @@ impl MapJob {
                         .into(),
                 ));
             }
-            let fitted = Layout::fit(&data.scans, progress)?;
             let map = fitted.map(self.calculus.clone(), &data.scans, config, progress)?;
             (map, config, None, Some(fitted))
         } else {
-            let (config, temper_fit) = self.temper(data, config, progress)?;
-            let mut map = Pqrm::new(self.calculus.clone(), config)?.with_evidence(self.evidence)?;
+            let (config, temper_fit) = self.temper_under(evidence, data, config, progress)?;
+            let mut map = Pqrm::new(self.calculus.clone(), config)?.with_evidence(evidence)?;
             progress.add_total(data.scans.len());
             for scan in &data.scans {
                 progress.check()?;
@@ -413,6 +476,9 @@ impl MapJob {
         put("seconds", json!(start.elapsed().as_secs_f64()));
         if let Some(fit) = &temper_fit {
             put("temper_fit", json!(fit));
+        }
+        if let Some(why) = &why {
+            put("evidence_choice", json!(why));
         }
         if let Some(l) = &layout {
             put(
