@@ -499,8 +499,8 @@ fn scans_from_dicts(scans: &[Bound<'_, PyDict>]) -> PyResult<Vec<Scan>> {
         .collect::<PyResult<Vec<Scan>>>()
 }
 
-/// The layout map of a recording (`pqrm::layout`, what `qrm map --evidence layout` makes, its
-/// default): every frame aligned into one layout of the landmarks, each set's belief the share
+/// The layout map of a recording (`pqrm::layout`: what `qrm map` makes by default where the
+/// frames agree on one layout, `--evidence layout`): every frame aligned into one layout of the landmarks, each set's belief the share
 /// of draws of its three positions — the layout's, give or take the error the frames share
 /// beyond it, measured from the frames — that fall in each state. `scans` as
 /// `read_observations` returns them. Returns (map, layout): the map a `Pqrm` whose evidence

@@ -85,6 +85,9 @@ fn the_main_run_and_the_variants_merge_in_any_order_into_the_run() {
         samples: 40,
         max_frames: Some(60),
         variants: studies::pqrm::real_data::standard_variants()[..2].to_vec(),
+        // the filter, so that the first variant (Gaussian, τ = 1) makes the main run's maps
+        // (the default layout map is no variant of the filter)
+        evidence: pqrm::EvidenceModel::shared_default(),
         ..RealDataConfig::quick(4)
     };
     assert_eq!(RealData::shards(&config).unwrap(), 3);
