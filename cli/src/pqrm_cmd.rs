@@ -148,7 +148,8 @@ fn map_job(a: &MapArgs) -> Result<MapJob> {
         evidence: if a.evidence.trim() == "auto" {
             pqrm::EvidenceModel::Layout
         } else {
-            pqrm::EvidenceModel::parse(&a.evidence).context("--evidence")?
+            pqrm::EvidenceModel::parse(&a.evidence)
+                .context("--evidence (or `auto`, the default: the layout where it fits)")?
         },
         auto_evidence: a.evidence.trim() == "auto",
         map_format: a.map_format.into(),
