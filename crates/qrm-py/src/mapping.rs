@@ -48,6 +48,17 @@ fn scan_from_arrays(
     Scan::new(t, robot, obs).map_err(perr)
 }
 
+/// `orderings=` as Python gives it: "all" or "canonical".
+fn parse_orderings(orderings: &str) -> PyResult<Orderings> {
+    match orderings {
+        "all" => Ok(Orderings::All),
+        "canonical" => Ok(Orderings::Canonical),
+        other => Err(invalid(format!(
+            "orderings must be \"all\" or \"canonical\", got {other:?}"
+        ))),
+    }
+}
+
 /// Surveyed positions as Python sees them: {landmark: (x, y)}.
 type TruthDict = BTreeMap<u32, (f64, f64)>;
 
@@ -88,15 +99,7 @@ impl Pqrm {
         evidence: &str,
     ) -> PyResult<Self> {
         let evidence = pqrm::EvidenceModel::parse(evidence).map_err(perr)?;
-        let orderings = match orderings {
-            "all" => Orderings::All,
-            "canonical" => Orderings::Canonical,
-            o => {
-                return Err(invalid(format!(
-                    "orderings must be \"all\" or \"canonical\", got {o:?}"
-                )));
-            }
-        };
+        let orderings = parse_orderings(orderings)?;
         let config = PqrmConfig {
             samples,
             floor,
@@ -516,15 +519,7 @@ pub(crate) fn layout_map<'py>(
     orderings: &str,
     seed: u64,
 ) -> PyResult<(Pqrm, Bound<'py, PyDict>)> {
-    let orderings = match orderings {
-        "all" => Orderings::All,
-        "canonical" => Orderings::Canonical,
-        other => {
-            return Err(invalid(format!(
-                "orderings must be \"all\" or \"canonical\", got {other:?}"
-            )));
-        }
-    };
+    let orderings = parse_orderings(orderings)?;
     let parsed = scans_from_dicts(&scans)?;
     let config = PqrmConfig {
         orderings,
