@@ -537,6 +537,9 @@ fn check(args: &CheckArgs) -> Result<()> {
 
 fn infer(args: &InferArgs) -> Result<()> {
     let map = load_map(&args.map)?;
+    if let Some(note) = pqrm::reason::calibration_note(map.evidence()) {
+        eprintln!("{note}");
+    }
     let options = InferOptions {
         fusion: args.fusion.into(),
         epsilon: args.epsilon,

@@ -139,6 +139,11 @@ fn scenario_finds_one_or_says_none() {
 
 /// Observations of 8 landmarks from two stops that see overlapping halves.
 fn small_map(dir: &Path) -> PathBuf {
+    small_map_with(dir, &[])
+}
+
+/// [`small_map`] mapped with `extra` flags.
+fn small_map_with(dir: &Path, extra: &[&str]) -> PathBuf {
     // No triplet within 1 % (relative) of a double-cross line: the ML states are the truth.
     let pts: [(u32, f64, f64); 8] = [
         (1, -0.22, -0.44),
@@ -156,24 +161,24 @@ fn small_map(dir: &Path) -> PathBuf {
             csv.push_str(&format!("{t},0,{id},{x},{y},0.000001,0,0.000001\n"));
         }
     }
+    std::fs::create_dir_all(dir).unwrap();
     let obs = dir.join("obs.csv");
     std::fs::write(&obs, csv).unwrap();
-    ok(
-        &[
-            "map",
-            "--format",
-            "csv",
-            "--input",
-            obs.to_str().unwrap(),
-            "--calculus",
-            "double-cross",
-            "--samples",
-            "200",
-            "--out",
-            dir.to_str().unwrap(),
-        ],
-        "",
-    );
+    let mut args = vec![
+        "map",
+        "--format",
+        "csv",
+        "--input",
+        obs.to_str().unwrap(),
+        "--calculus",
+        "double-cross",
+        "--samples",
+        "200",
+        "--out",
+        dir.to_str().unwrap(),
+    ];
+    args.extend_from_slice(extra);
+    ok(&args, "");
     dir.join("map.json")
 }
 
@@ -289,6 +294,42 @@ fn check_and_infer_work_on_a_saved_map() {
     );
     assert_eq!(out.status.code(), Some(1));
     assert!(String::from_utf8_lossy(&out.stderr).contains("99"));
+}
+
+/// Issue 35: inference over a layout map (`qrm map`'s default on a recording whose frames
+/// agree on one layout) was measured overconfident where inference over the filter's maps
+/// was closer to calibrated; `qrm reason infer` says so on stderr for a layout map and only for one.
+#[test]
+fn infer_over_a_layout_map_says_what_its_calibration_was_measured_to_be() {
+    let dir = tmp("infer-layout-note");
+    let map = small_map(&dir);
+    let summary: Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(summary["evidence"], "layout", "{summary}");
+    let inferred = dir.join("inferred.json");
+    let infer = |map: &Path| {
+        let out = qrm(
+            &[
+                "reason",
+                "infer",
+                map.to_str().unwrap(),
+                "--out",
+                inferred.to_str().unwrap(),
+            ],
+            "",
+        );
+        assert!(out.status.success(), "{out:?}");
+        String::from_utf8_lossy(&out.stderr).into_owned()
+    };
+    let note = infer(&map);
+    assert!(
+        note.contains("layout map") && note.contains("--evidence shared"),
+        "{note}"
+    );
+    // The same frames mapped by the filter: no note.
+    let filter = small_map_with(&dir.join("filter"), &["--evidence", "shared"]);
+    let quiet = infer(&filter);
+    assert!(!quiet.contains("layout map"), "{quiet}");
 }
 
 /// Regression (issue 14): `qrm reason infer --set A,B,D` composed through the sets a full

@@ -1,6 +1,7 @@
 """qrm.Pqrm from Python: equal to the Rust CLI's map for the same seed; files; metrics."""
 import json
 import subprocess
+import warnings
 
 import numpy as np
 import pytest
@@ -103,6 +104,16 @@ def test_a_recording_mapped_by_its_layout_is_what_qrm_map_makes(mrclam_dir, qrm_
     assert cli.evidence == "layout" and sorted(cli.sets()) == sorted(m.sets())
     for s in m.sets()[::7]:
         assert np.allclose(cli.belief(s), m.belief(s), atol=1e-5)
+    # inference over a layout map warns how its calibration was measured; over the filter's, not
+    with pytest.warns(UserWarning, match="layout map"):
+        assert abs(m.infer(m.sets()[0])["p"].sum() - 1.0) < 1e-9
+    f = qrm.Pqrm(edc, samples=100)
+    for s in scans[:200]:
+        if len(s["ids"]) >= 3:
+            f.update(s["t"], s["ids"], s["xy"], s["cov"])
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        f.infer(f.sets()[0])
     one = [s for s in scans if len(s["ids"]) >= 3][0]
     with pytest.raises(qrm.QrmError, match="layout map"):
         m.update(one["t"], one["ids"], one["xy"], one["cov"])

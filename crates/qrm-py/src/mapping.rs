@@ -166,7 +166,9 @@ impl Pqrm {
     /// int, "alpha": float, "composition": str, "base_rate": bool}. A set the map observed is predicted from the observed beliefs; a
     /// set never observed is inferred as in the run over every unseen set (`rounds` of
     /// chained composition), so the two agree. `composition`: "learned" (each composition
-    /// entry's states shared as the map's own quadruples show them) or "uniform".
+    /// entry's states shared as the map's own quadruples show them) or "uniform". On a layout
+    /// map (`layout_map`) a UserWarning says inference over layout maps was measured
+    /// overconfident where over the filter's (`Pqrm`) it was closer to calibrated (docs/reasoning.md).
     #[pyo3(signature = (set, *, fusion = "fitted", epsilon = 0.01, rounds = 1, composition = "learned"))]
     fn infer<'py>(
         &self,
@@ -186,6 +188,16 @@ impl Pqrm {
             rounds,
         };
         let map = &self.inner;
+        if let Some(note) = pqrm::reason::calibration_note(map.evidence()) {
+            let text = std::ffi::CString::new(note.trim_start_matches("note: "))
+                .map_err(|e| pyo3::exceptions::PyValueError::new_err(e.to_string()))?;
+            PyErr::warn(
+                py,
+                &py.get_type::<pyo3::exceptions::PyUserWarning>(),
+                &text,
+                1,
+            )?;
+        }
         let (inf, alpha, base_rate) = crate::pool::detach(py, || {
             let mut inferrer = pqrm::reason::Inferrer::new(map, options)?;
             // as the run over every unseen set infers it (`Inferrer::infer_sets`)

@@ -52,4 +52,4 @@ pub mod report;
 pub use check::{FlaggedEntry, MapCheck, check};
 pub use inference::{Composition, Fusion, InferOptions, Inference, Inferrer, infer};
 pub use network::{Selection, landmarks, observed_sets, to_network};
-pub use report::{InferenceReport, InferredSet};
+pub use report::{InferenceReport, InferredSet, calibration_note};

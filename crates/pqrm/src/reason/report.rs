@@ -6,12 +6,34 @@ use std::fmt::Write as _;
 use qsr_core::Calculus;
 use serde::Serialize;
 
+use crate::evidence::EvidenceModel;
 use crate::reason::check::MapCheck;
 use crate::reason::inference::{Inference, Inferrer};
 
 /// An inference below uniform entropy by more than this (nats) is "more informative than
 /// uniform": a distribution the paths moved.
 pub const INFORMATIVE_NATS: f64 = 0.05;
+
+/// What someone inferring over a map read under `evidence` should know about how far the
+/// inferences' probabilities were measured to hold; `None` for the filter's maps (the reason
+/// study's own, `shared:4`). Composition fits its pool on the map's own beliefs, and a layout
+/// map's beliefs all come from one set of positions: a path and the set it predicts share
+/// the layout's error, so the fit cannot see it. Measured (reason study, hidden sets,
+/// Datasets 2 / 5 / 7, `docs/reasoning.md` "Reasoning over a layout map"): EDC ECE 0.100 /
+/// 0.034 / 0.120 over layout maps against 0.044 / 0.020 / 0.065 over the filter's, and no
+/// tempering of the pool fixed it on all three.
+#[must_use]
+pub fn calibration_note(evidence: EvidenceModel) -> Option<&'static str> {
+    match evidence {
+        EvidenceModel::Layout => Some(
+            "note: this is a layout map (evidence \"layout\"): inference over layout maps was measured \
+             overconfident on two of three MRCLAM recordings, where inference over the filter's maps was \
+             closer to calibrated (docs/reasoning.md, \"Reasoning over a layout map\"); for a map to reason over, map with \
+             the filter (qrm map --evidence shared; Python: qrm.Pqrm)",
+        ),
+        EvidenceModel::Independent | EvidenceModel::Shared { .. } => None,
+    }
+}
 
 /// One inferred set, with its most likely state and entropy.
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -168,6 +190,17 @@ impl MapCheck {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn only_a_layout_map_gets_the_calibration_note() {
+        let note = calibration_note(EvidenceModel::Layout).unwrap_or_default();
+        assert!(
+            note.contains("layout map") && note.contains("--evidence shared"),
+            "{note}"
+        );
+        assert_eq!(calibration_note(EvidenceModel::Independent), None);
+        assert_eq!(calibration_note(EvidenceModel::shared_default()), None);
+    }
 
     fn set(p: Vec<f64>, paths: usize) -> InferredSet {
         InferredSet {
