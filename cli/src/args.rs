@@ -284,7 +284,9 @@ pub struct MapArgs {
     /// it, measured on the recording itself — `pqrm::layout`, calibrated on every MRCLAM
     /// recording tried), `shared` (the filter's frames share the geometry and an error as large
     /// as N = 4 independent frames'; `shared:N`, `shared:inf`; a map that can take more frames
-    /// and be merged) or `independent`, the thesis's eq. 2.10 (overconfident on real data).
+    /// and be merged), `shared:auto` (the filter with the N the recording's layout measures,
+    /// σ_frame² / σ_shared²; the summary says which) or `independent`, the thesis's eq. 2.10
+    /// (overconfident on real data).
     #[arg(long, default_value = "auto")]
     pub evidence: String,
     /// Map only these robots' scans (comma-separated robot numbers, e.g. `1,2`).

@@ -145,13 +145,7 @@ fn map_job(a: &MapArgs) -> Result<MapJob> {
         config,
         orderings: a.orderings.into(),
         temper: TemperChoice::parse(&a.temper).context("--temper")?,
-        evidence: if a.evidence.trim() == "auto" {
-            pqrm::EvidenceModel::Layout
-        } else {
-            pqrm::EvidenceModel::parse(&a.evidence)
-                .context("--evidence (or `auto`, the default: the layout where it fits)")?
-        },
-        auto_evidence: a.evidence.trim() == "auto",
+        evidence: studies::mapping::EvidenceRequest::parse(&a.evidence).context("--evidence")?,
         map_format: a.map_format.into(),
     })
 }
@@ -173,7 +167,7 @@ fn map_into(
         .summary
         .get("evidence_choice")
         .and_then(|v| v.as_str())
-        && why.contains("disagree")
+        && (why.contains("disagree") || why.contains("cannot measure"))
     {
         eprintln!("warning: {label}: {why}");
     }

@@ -133,6 +133,39 @@ fn map_builds_saves_and_scores_a_pqrm() {
     assert_eq!(s["top_n_error"].as_array().unwrap().len(), 20);
     assert!(s["error_rate"].as_f64().unwrap() < 0.2);
     assert!(out.join("map.json").exists());
+    // Three frames cannot measure the error they share: `shared:auto` falls back to N = 4,
+    // says so on stderr and in the summary.
+    let auto = dir.join("auto");
+    let o = qrm(
+        &[
+            "map",
+            "--format",
+            "csv",
+            "--input",
+            obs.to_str().unwrap(),
+            "--calculus",
+            "edc",
+            "--evidence",
+            "shared:auto",
+            "--samples",
+            "100",
+            "--out",
+            auto.to_str().unwrap(),
+        ],
+        "",
+    );
+    assert!(o.status.success(), "{o:?}");
+    assert!(String::from_utf8_lossy(&o.stderr).contains("cannot measure N"));
+    let a: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(auto.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(a["evidence"], "shared:4", "{a}");
+    assert!(
+        a["evidence_choice"]
+            .as_str()
+            .unwrap()
+            .contains("measured: false"),
+        "{a}"
+    );
     // A malformed file names its line.
     std::fs::write(
         dir.join("bad.csv"),
@@ -214,6 +247,20 @@ fn map_reads_mrclam_with_its_ground_truth() {
         "better than a random guess: {s}"
     );
     assert_eq!(s["top_n_error"].as_array().unwrap().len(), 6);
+    // A layout map (the default here) also says which N a filter map of the recording would
+    // be read under: σ_frame² / σ_shared², as `--evidence shared:N`. Dataset 7's frames share
+    // little (the constant N = 4 leaves its filter map underconfident: docs/calibration.md).
+    assert_eq!(s["evidence"], "layout", "{s}");
+    let shared = &s["layout"]["shared_error"];
+    let ratio = (shared["sigma_frame"].as_f64().unwrap()
+        / shared["sigma_shared"].as_f64().unwrap())
+    .powi(2);
+    let said = s["layout"]["filter_evidence"].as_str().unwrap();
+    let n: f64 = said.strip_prefix("shared:").unwrap().parse().unwrap();
+    assert!(
+        (n - ratio).abs() < 1e-9 * ratio && n > 4.0,
+        "{said} against {ratio}"
+    );
     std::fs::remove_dir_all(&out).ok();
 }
 
@@ -504,9 +551,10 @@ fn per_robot_maps_merge_into_the_pooled_map() {
             "--samples",
             "300",
             "--per-robot",
-            // merging is the filter's: a layout map merges with nothing
+            // merging is the filter's: a layout map merges with nothing; `shared:auto` reads
+            // every robot's map with the N of the whole recording's layout, so they merge
             "--evidence",
-            "shared",
+            "shared:auto",
             "--out",
             &s(&per),
         ],
@@ -525,7 +573,7 @@ fn per_robot_maps_merge_into_the_pooled_map() {
             "--samples",
             "300",
             "--evidence",
-            "shared",
+            "shared:auto",
             "--out",
             &s(&pooled),
         ],
@@ -544,6 +592,20 @@ fn per_robot_maps_merge_into_the_pooled_map() {
         serde_json::from_str(&std::fs::read_to_string(pooled.join("summary.json")).unwrap())
             .unwrap();
     assert_eq!(m["n_sets"], p["n_sets"]);
+    // one N for all: the recording's, σ_frame² / σ_shared² of its layout
+    let evidence = p["evidence"].as_str().unwrap();
+    let n: f64 = evidence.strip_prefix("shared:").unwrap().parse().unwrap();
+    assert!(n.is_finite() && n > 1.0, "{evidence}");
+    assert!(
+        p["evidence_choice"]
+            .as_str()
+            .unwrap()
+            .starts_with("shared:auto: the filter"),
+        "{p}"
+    );
+    for r in 1..=5 {
+        assert_eq!(per_robot[format!("robot{r}")]["evidence"], evidence);
+    }
     let (em, ep) = (
         m["error_rate"].as_f64().unwrap(),
         p["error_rate"].as_f64().unwrap(),

@@ -49,8 +49,12 @@ use crate::error::{PqrmError, Result};
 /// the other two, summed over the six point calculi, `qrm pqrm real`'s pipeline (fitted
 /// noise, 3σ gate) and, separately, without the gate. The folds chose 2, 4 and 8 (gated) and
 /// 2, 4 and 4 (not gated); 4 is their median. The recordings disagree — Dataset 7 is best
-/// near 32, Dataset 5 near 2 — so a per-recording estimate of the shared error would do
-/// better than any constant.
+/// near 32, Dataset 5 near 2 — so a per-recording estimate of the shared error does better
+/// than any constant where the whole recording is at hand: `qrm map --evidence shared:auto`
+/// reads the filter with `N = σ_frame² / σ_shared²` of the recording's layout
+/// ([`crate::layout::SharedError::frames`]; 5.9 / 4.4 / 16.3 on Datasets 2 / 5 / 7, EDC ECE
+/// 0.038 / 0.063 / 0.058 against 0.036 / 0.063 / 0.100 at N = 4). A filter that takes
+/// frames one by one (Python's `Pqrm`) has no recording to measure it on.
 pub const DEFAULT_SHARED_FRAMES: f64 = 4.0;
 
 /// The largest finite `N` [`EvidenceModel::Shared`] accepts (beyond it, say `inf`: for any

@@ -101,6 +101,35 @@ pub struct SharedError {
     pub measured: bool,
 }
 
+impl SharedError {
+    /// The `N` of the filter's shared-error model ([`crate::evidence`]) that this recording
+    /// measures: `N = σ_frame² / σ_shared²`, the number of independent frames whose noise
+    /// equals the error they all share (the model's own definition, `σ² / σ_b²`, read off
+    /// the layout instead of chosen for every recording). `∞` with no shared error (or one
+    /// too small to tell from it); `None` where the frames did not measure it or disagree
+    /// with their layout by more than their own noise (`σ_shared > σ_frame`: ids that do not
+    /// name one place, where the layout says nothing about the filter's sets).
+    #[must_use]
+    pub fn frames(&self) -> Option<f64> {
+        // NaN compares false: a broken estimate says nothing either
+        let agrees = matches!(
+            self.sigma_shared.partial_cmp(&self.sigma_frame),
+            Some(std::cmp::Ordering::Less | std::cmp::Ordering::Equal)
+        );
+        if !self.measured || !agrees {
+            return None;
+        }
+        let n = (self.sigma_frame / self.sigma_shared).powi(2);
+        Some(
+            if n.is_finite() && n <= crate::evidence::MAX_SHARED_FRAMES {
+                n
+            } else {
+                f64::INFINITY
+            },
+        )
+    }
+}
+
 /// One landmark of the layout.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct LayoutLandmark {
@@ -780,6 +809,26 @@ mod tests {
         assert!(b[0][0] > 0.99, "{:?}", b[0]);
         // the ordering {5, 3 : 8} sees 8 on the other side
         assert!(b[1][1] > 0.99, "{:?}", b[1]);
+    }
+
+    #[test]
+    fn the_filters_frames_are_the_ratio_of_the_two_errors_squared() {
+        let e = |sigma_shared: f64, sigma_frame: f64, measured: bool| SharedError {
+            sigma_shared,
+            sigma_frame,
+            pairs: 10,
+            measured,
+        };
+        let n = e(0.022, 0.088, true).frames().unwrap_or_default();
+        assert!((n - 16.0).abs() < 1e-9, "{n}");
+        assert_eq!(e(0.0, 0.088, true).frames(), Some(f64::INFINITY));
+        assert_eq!(e(1e-12, 0.088, true).frames(), Some(f64::INFINITY));
+        assert_eq!(e(0.05, 0.05, true).frames(), Some(1.0));
+        // disagreeing with the layout, unmeasured or broken: nothing to say
+        assert_eq!(e(0.2, 0.1, true).frames(), None);
+        assert_eq!(e(0.02, 0.1, false).frames(), None);
+        assert_eq!(e(f64::NAN, 0.1, true).frames(), None);
+        assert_eq!(e(0.0, 0.0, true).frames(), Some(f64::INFINITY));
     }
 
     #[test]

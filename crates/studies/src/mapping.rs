@@ -189,14 +189,47 @@ pub struct MapJob {
     pub orderings: OrderingsChoice,
     /// τ, or `auto`.
     pub temper: TemperChoice,
-    /// How a set's frames combine into its belief.
-    pub evidence: pqrm::EvidenceModel,
-    /// `--evidence auto`, the default (with `evidence` the layout): the layout map where the
-    /// frames agree on one layout ([`layout_agrees`]) and τ = 1, else the filter under the
-    /// shared-error model; the summary says which and why.
-    pub auto_evidence: bool,
+    /// How a set's frames combine into its belief: a model, or one the recording chooses.
+    pub evidence: EvidenceRequest,
     /// The map file's format.
     pub map_format: MapFormatChoice,
+}
+
+/// What `--evidence` asks for: a model as given, or one chosen from the recording (the
+/// summary's `evidence_choice` then says which and why).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum EvidenceRequest {
+    /// This model.
+    Model(pqrm::EvidenceModel),
+    /// `auto`, `qrm map`'s default: the layout map where the frames agree on one layout
+    /// ([`layout_agrees`]) and τ = 1, else the filter under `shared:4`.
+    Auto,
+    /// `shared:auto`: the filter, read with the `N` the whole recording's layout measures
+    /// ([`pqrm::layout::SharedError::frames`], `σ_frame² / σ_shared²`; the same for every
+    /// robot's map of it, so they merge), or `shared:4` where the layout cannot say.
+    SharedMeasured,
+}
+
+impl EvidenceRequest {
+    /// Parses `auto`, `shared:auto` or a model ([`pqrm::EvidenceModel::parse`]).
+    ///
+    /// # Errors
+    /// The model's, naming what is accepted.
+    pub fn parse(text: &str) -> Result<Self> {
+        let t = text.trim();
+        if t.eq_ignore_ascii_case("auto") {
+            Ok(Self::Auto)
+        } else if t.eq_ignore_ascii_case("shared:auto") {
+            Ok(Self::SharedMeasured)
+        } else {
+            pqrm::EvidenceModel::parse(t).map(Self::Model).map_err(|e| {
+                StudyError::InvalidParameter(format!(
+                    "{e} — or `auto` (the default: the layout where the frames agree on one) or \
+                     `shared:auto` (the filter with the N the recording's layout measures)"
+                ))
+            })
+        }
+    }
 }
 
 /// Whether the frames agree on one layout: the error they share beyond it within their own
@@ -334,20 +367,11 @@ impl MapJob {
         Ok(())
     }
 
-    /// τ for `data`: the given one, or `auto` chosen from held-out frames (no ground truth).
+    /// τ for `data` read under `evidence`: the given one, or `auto` chosen from held-out
+    /// frames (no ground truth).
     ///
     /// # Errors
     /// The fit's (too few frames to hold any out).
-    pub fn temper(
-        &self,
-        data: &Dataset,
-        config: PqrmConfig,
-        progress: &dyn Progress,
-    ) -> Result<(PqrmConfig, Option<TemperFit>)> {
-        self.temper_under(self.evidence, data, config, progress)
-    }
-
-    /// [`MapJob::temper`] for a map read under `evidence`.
     fn temper_under(
         &self,
         evidence: pqrm::EvidenceModel,
@@ -389,14 +413,40 @@ impl MapJob {
     /// for `auto`, what was chosen and why.
     fn choose_evidence(
         &self,
+        whole: &Dataset,
         data: &Dataset,
         progress: &dyn Progress,
     ) -> Result<(pqrm::EvidenceModel, Option<Layout>, Option<String>)> {
-        if self.evidence != pqrm::EvidenceModel::Layout {
-            return Ok((self.evidence, None, None));
-        }
+        let auto = match self.evidence {
+            EvidenceRequest::Model(pqrm::EvidenceModel::Layout) => false,
+            EvidenceRequest::Model(model) => return Ok((model, None, None)),
+            EvidenceRequest::Auto => true,
+            EvidenceRequest::SharedMeasured => {
+                let s = Layout::fit(&whole.scans, progress)?.shared_error();
+                return Ok(match s.frames() {
+                    Some(frames) => {
+                        let model = pqrm::EvidenceModel::Shared { frames };
+                        let why = format!(
+                            "shared:auto: the filter ({model}), N = (σ_frame {:.3} m / σ_shared \
+                             {:.3} m)² from the recording's layout",
+                            s.sigma_frame, s.sigma_shared
+                        );
+                        (model, None, Some(why))
+                    }
+                    None => {
+                        let model = pqrm::EvidenceModel::shared_default();
+                        let why = format!(
+                            "shared:auto: the filter ({model}): the recording's layout cannot \
+                             measure N (σ_shared {:.3} m, σ_frame {:.3} m, measured: {})",
+                            s.sigma_shared, s.sigma_frame, s.measured
+                        );
+                        (model, None, Some(why))
+                    }
+                });
+            }
+        };
         let filter = pqrm::EvidenceModel::shared_default();
-        if self.auto_evidence && self.temper != TemperChoice::Fixed(1.0) {
+        if auto && self.temper != TemperChoice::Fixed(1.0) {
             return Ok((
                 filter,
                 None,
@@ -404,7 +454,7 @@ impl MapJob {
             ));
         }
         let fitted = Layout::fit(&data.scans, progress)?;
-        if self.auto_evidence && !layout_agrees(&fitted) {
+        if auto && !layout_agrees(&fitted) {
             let s = fitted.shared_error();
             return Ok((
                 filter,
@@ -417,7 +467,7 @@ impl MapJob {
                 )),
             ));
         }
-        let why = self.auto_evidence.then(|| "auto: the layout".to_owned());
+        let why = auto.then(|| "auto: the layout".to_owned());
         Ok((pqrm::EvidenceModel::Layout, Some(fitted), why))
     }
 
@@ -431,7 +481,7 @@ impl MapJob {
             ..self.config
         };
         let start = Instant::now();
-        let (evidence, layout, why) = self.choose_evidence(data, progress)?;
+        let (evidence, layout, why) = self.choose_evidence(&input.data, data, progress)?;
         let (map, config, temper_fit, layout) = if let Some(fitted) = layout {
             if self.temper != TemperChoice::Fixed(1.0) {
                 return Err(StudyError::InvalidParameter(
@@ -485,6 +535,12 @@ impl MapJob {
                 "layout",
                 json!({
                     "shared_error": l.shared_error(),
+                    // the filter's reading this recording measures (`--evidence shared:N` for
+                    // a filter map of it), null where the layout cannot say
+                    "filter_evidence": l
+                        .shared_error()
+                        .frames()
+                        .map(|frames| pqrm::EvidenceModel::Shared { frames }.to_string()),
                     "landmarks": l
                         .landmarks()
                         .iter()
@@ -630,6 +686,32 @@ mod tests {
         assert_eq!(possible_ordered_sets(&scans), 5 * 24);
         assert_eq!(possible_ordered_sets(&[]), 0);
         assert_eq!(possible_ordered_sets(&[scan(0..2)]), 0);
+    }
+
+    #[test]
+    fn evidence_requests_parse_auto_shared_auto_and_every_model() {
+        assert_eq!(
+            EvidenceRequest::parse(" Auto ").ok(),
+            Some(EvidenceRequest::Auto)
+        );
+        assert_eq!(
+            EvidenceRequest::parse("shared:auto").ok(),
+            Some(EvidenceRequest::SharedMeasured)
+        );
+        assert_eq!(
+            EvidenceRequest::parse("shared:8").ok(),
+            Some(EvidenceRequest::Model(pqrm::EvidenceModel::Shared {
+                frames: 8.0
+            }))
+        );
+        assert_eq!(
+            EvidenceRequest::parse("layout").ok(),
+            Some(EvidenceRequest::Model(pqrm::EvidenceModel::Layout))
+        );
+        let err = EvidenceRequest::parse("shared:many")
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains("many") && err.contains("shared:auto"), "{err}");
     }
 
     #[test]
