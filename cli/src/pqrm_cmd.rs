@@ -163,12 +163,7 @@ fn map_into(
     let pb = crate::progress::Bar::new(0, label);
     let mut mapped = job.map(input, data, &pb)?;
     pb.finish_and_clear();
-    if let Some(why) = mapped
-        .summary
-        .get("evidence_choice")
-        .and_then(|v| v.as_str())
-        && (why.contains("disagree") || why.contains("cannot measure"))
-    {
+    if let Some(why) = &mapped.fell_back {
         eprintln!("warning: {label}: {why}");
     }
     if let Some(fit) = &mapped.temper_fit {

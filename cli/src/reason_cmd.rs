@@ -538,7 +538,7 @@ fn check(args: &CheckArgs) -> Result<()> {
 fn infer(args: &InferArgs) -> Result<()> {
     let map = load_map(&args.map)?;
     if let Some(note) = pqrm::reason::calibration_note(map.evidence()) {
-        eprintln!("{note}");
+        eprintln!("note: {note}");
     }
     let options = InferOptions {
         fusion: args.fusion.into(),

@@ -101,8 +101,9 @@ fn map_builds_saves_and_scores_a_pqrm() {
     let dir = tmp("map");
     let (obs, truth) = write_csv_dataset(&dir);
     let out = dir.join("out");
-    ok(
-        &[
+    // `qrm map` of the CSV with EDC into `out`, and `extra` flags
+    let map_csv = |out: &Path, extra: &[&str]| {
+        let mut args = vec![
             "map",
             "--format",
             "csv",
@@ -110,15 +111,17 @@ fn map_builds_saves_and_scores_a_pqrm() {
             obs.to_str().unwrap(),
             "--calculus",
             "edc",
-            "--truth",
-            truth.to_str().unwrap(),
-            "--samples",
-            "300",
             "--out",
             out.to_str().unwrap(),
-        ],
-        "",
+        ];
+        args.extend_from_slice(extra);
+        qrm(&args, "")
+    };
+    let o = map_csv(
+        &out,
+        &["--truth", truth.to_str().unwrap(), "--samples", "300"],
     );
+    assert!(o.status.success(), "{o:?}");
     let s: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
     assert_eq!(s["n_sets"], 24, "4 landmarks: 4·3·2 ordered triplets");
@@ -136,24 +139,7 @@ fn map_builds_saves_and_scores_a_pqrm() {
     // Three frames cannot measure the error they share: `shared:auto` falls back to N = 4,
     // says so on stderr and in the summary.
     let auto = dir.join("auto");
-    let o = qrm(
-        &[
-            "map",
-            "--format",
-            "csv",
-            "--input",
-            obs.to_str().unwrap(),
-            "--calculus",
-            "edc",
-            "--evidence",
-            "shared:auto",
-            "--samples",
-            "100",
-            "--out",
-            auto.to_str().unwrap(),
-        ],
-        "",
-    );
+    let o = map_csv(&auto, &["--evidence", "shared:auto", "--samples", "100"]);
     assert!(o.status.success(), "{o:?}");
     assert!(String::from_utf8_lossy(&o.stderr).contains("cannot measure N"));
     let a: serde_json::Value =

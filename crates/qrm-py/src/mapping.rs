@@ -189,7 +189,7 @@ impl Pqrm {
         };
         let map = &self.inner;
         if let Some(note) = pqrm::reason::calibration_note(map.evidence()) {
-            let text = std::ffi::CString::new(note.trim_start_matches("note: "))
+            let text = std::ffi::CString::new(note)
                 .map_err(|e| pyo3::exceptions::PyValueError::new_err(e.to_string()))?;
             PyErr::warn(
                 py,

@@ -291,7 +291,43 @@ pub struct Mapped {
     pub summary: Map<String, Value>,
     /// The τ chosen from the recording, when `auto` chose one (also in the summary).
     pub temper_fit: Option<TemperFit>,
+    /// Why the evidence model is not the one asked for, when the recording could not give it
+    /// (also the summary's `evidence_choice`): a user should be told.
+    pub fell_back: Option<String>,
     format: MapFormatChoice,
+}
+
+/// What [`MapJob`] maps a recording under.
+struct Chosen {
+    evidence: pqrm::EvidenceModel,
+    /// The fitted layout, when that is the model.
+    layout: Option<Layout>,
+    /// For a model the recording chose: which and why.
+    why: Option<String>,
+    /// Whether the recording could not give what was asked (the layout, or the measured N).
+    fell_back: bool,
+}
+
+impl Chosen {
+    /// A model as given.
+    fn given(evidence: pqrm::EvidenceModel) -> Self {
+        Self {
+            evidence,
+            layout: None,
+            why: None,
+            fell_back: false,
+        }
+    }
+
+    /// The filter under `evidence`, chosen for `why`.
+    fn filter(evidence: pqrm::EvidenceModel, why: String, fell_back: bool) -> Self {
+        Self {
+            evidence,
+            layout: None,
+            why: Some(why),
+            fell_back,
+        }
+    }
 }
 
 impl MapJob {
@@ -410,65 +446,69 @@ impl MapJob {
     }
 
     /// The model `data` is mapped under, with the fitted layout when that is the layout, and,
-    /// for `auto`, what was chosen and why.
+    /// for a model the recording chooses, what was chosen and why.
     fn choose_evidence(
         &self,
         whole: &Dataset,
         data: &Dataset,
         progress: &dyn Progress,
-    ) -> Result<(pqrm::EvidenceModel, Option<Layout>, Option<String>)> {
+    ) -> Result<Chosen> {
         let auto = match self.evidence {
             EvidenceRequest::Model(pqrm::EvidenceModel::Layout) => false,
-            EvidenceRequest::Model(model) => return Ok((model, None, None)),
+            EvidenceRequest::Model(model) => return Ok(Chosen::given(model)),
             EvidenceRequest::Auto => true,
             EvidenceRequest::SharedMeasured => {
                 let s = Layout::fit(&whole.scans, progress)?.shared_error();
                 return Ok(match s.frames() {
                     Some(frames) => {
                         let model = pqrm::EvidenceModel::Shared { frames };
-                        let why = format!(
-                            "shared:auto: the filter ({model}), N = (σ_frame {:.3} m / σ_shared \
-                             {:.3} m)² from the recording's layout",
-                            s.sigma_frame, s.sigma_shared
-                        );
-                        (model, None, Some(why))
+                        Chosen::filter(
+                            model,
+                            format!(
+                                "shared:auto: the filter ({model}), N = (σ_frame {:.3} m / \
+                                 σ_shared {:.3} m)² from the recording's layout",
+                                s.sigma_frame, s.sigma_shared
+                            ),
+                            false,
+                        )
                     }
                     None => {
                         let model = pqrm::EvidenceModel::shared_default();
-                        let why = format!(
-                            "shared:auto: the filter ({model}): the recording's layout cannot \
-                             measure N (σ_shared {:.3} m, σ_frame {:.3} m, measured: {})",
-                            s.sigma_shared, s.sigma_frame, s.measured
-                        );
-                        (model, None, Some(why))
+                        Chosen::filter(
+                            model,
+                            format!(
+                                "shared:auto: the filter ({model}): the recording's layout cannot \
+                                 measure N (σ_shared {:.3} m, σ_frame {:.3} m, measured: {})",
+                                s.sigma_shared, s.sigma_frame, s.measured
+                            ),
+                            true,
+                        )
                     }
                 });
             }
         };
         let filter = pqrm::EvidenceModel::shared_default();
         if auto && self.temper != TemperChoice::Fixed(1.0) {
-            return Ok((
-                filter,
-                None,
-                Some(format!("auto: the filter ({filter}): τ tempers its frames")),
-            ));
+            let why = format!("auto: the filter ({filter}): τ tempers its frames");
+            return Ok(Chosen::filter(filter, why, false));
         }
         let fitted = Layout::fit(&data.scans, progress)?;
         if auto && !layout_agrees(&fitted) {
             let s = fitted.shared_error();
-            return Ok((
-                filter,
-                None,
-                Some(format!(
-                    "auto: the filter ({filter}): the frames disagree with their best layout by \
-                     σ {:.3} m, more than their own noise (σ {:.3} m) — landmark ids that do not \
-                     name one place in every frame",
-                    s.sigma_shared, s.sigma_frame
-                )),
-            ));
+            let why = format!(
+                "auto: the filter ({filter}): the frames disagree with their best layout by σ \
+                 {:.3} m, more than their own noise (σ {:.3} m) — landmark ids that do not name \
+                 one place in every frame",
+                s.sigma_shared, s.sigma_frame
+            );
+            return Ok(Chosen::filter(filter, why, true));
         }
-        let why = auto.then(|| "auto: the layout".to_owned());
-        Ok((pqrm::EvidenceModel::Layout, Some(fitted), why))
+        Ok(Chosen {
+            evidence: pqrm::EvidenceModel::Layout,
+            layout: Some(fitted),
+            why: auto.then(|| "auto: the layout".to_owned()),
+            fell_back: false,
+        })
     }
 
     /// Maps `data` (all of the input, or one robot's) with the orderings `input` chose.
@@ -481,7 +521,12 @@ impl MapJob {
             ..self.config
         };
         let start = Instant::now();
-        let (evidence, layout, why) = self.choose_evidence(&input.data, data, progress)?;
+        let Chosen {
+            evidence,
+            layout,
+            why,
+            fell_back,
+        } = self.choose_evidence(&input.data, data, progress)?;
         let (map, config, temper_fit, layout) = if let Some(fitted) = layout {
             if self.temper != TemperChoice::Fixed(1.0) {
                 return Err(StudyError::InvalidParameter(
@@ -563,6 +608,7 @@ impl MapJob {
             map,
             summary,
             temper_fit,
+            fell_back: if fell_back { why } else { None },
             format: self.map_format,
         })
     }

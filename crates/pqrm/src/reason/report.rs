@@ -26,7 +26,7 @@ pub const INFORMATIVE_NATS: f64 = 0.05;
 pub fn calibration_note(evidence: EvidenceModel) -> Option<&'static str> {
     match evidence {
         EvidenceModel::Layout => Some(
-            "note: this is a layout map (evidence \"layout\"): inference over layout maps was measured \
+            "this is a layout map (evidence \"layout\"): inference over layout maps was measured \
              overconfident on two of three MRCLAM recordings, where inference over the filter's maps was \
              closer to calibrated (docs/reasoning.md, \"Reasoning over a layout map\"); for a map to reason over, map with \
              the filter (qrm map --evidence shared; Python: qrm.Pqrm)",
